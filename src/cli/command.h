@@ -1,0 +1,23 @@
+// meshcvt CLI: each subcommand lives in its own file and registers itself here, so adding one
+// touches no shared file.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+namespace meshcvt::cli {
+
+/// Registers a subcommand; `order` sorts them in --help. Use at namespace scope:
+///   static const RegisterCommand reg(10, [](CLI::App& app) { ... app.add_subcommand(...) ... });
+struct RegisterCommand {
+  RegisterCommand(int order, void (*add)(CLI::App& app));
+};
+
+/// True when stderr is a terminal (progress lines are shown only then).
+bool stderr_is_terminal();
+
+/// Appends the --device option (auto|cpu|gpu|gpu:N) to a subcommand.
+void add_device_option(CLI::App* sub, std::string& device);
+
+}  // namespace meshcvt::cli

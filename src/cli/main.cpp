@@ -1,0 +1,64 @@
+// meshcvt command-line tool: subcommands register themselves (see command.h); this file parses,
+// dispatches and turns every error into "meshcvt: error: ..." with exit code 1 (2 for bad usage).
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <exception>
+#include <new>
+#include <utility>
+#include <vector>
+
+#include "cli/command.h"
+#include "meshcvt/error.h"
+
+namespace meshcvt::cli {
+
+namespace {
+std::vector<std::pair<int, void (*)(CLI::App&)>>& registry() {
+  static std::vector<std::pair<int, void (*)(CLI::App&)>> r;
+  return r;
+}
+}  // namespace
+
+RegisterCommand::RegisterCommand(int order, void (*add)(CLI::App& app)) { registry().emplace_back(order, add); }
+
+bool stderr_is_terminal() { return isatty(STDERR_FILENO) == 1; }
+
+void add_device_option(CLI::App* sub, std::string& device) {
+  sub->add_option("--device", device,
+                  "auto | cpu | gpu | gpu:N (default: $MESHCVT_DEVICE, else auto: a discrete or "
+                  "integrated GPU if any, else the CPU engine)");
+}
+
+}  // namespace meshcvt::cli
+
+int main(int argc, char** argv) {
+  CLI::App app{"meshcvt: mesh clustering by approximating Centroidal Voronoi Tessellation"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "meshcvt 0.1.0");
+  auto& reg = meshcvt::cli::registry();
+  std::stable_sort(reg.begin(), reg.end(), [](auto& a, auto& b) { return a.first < b.first; });
+  for (auto& [order, add] : reg) add(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "meshcvt: error: %s\n", e.what());
+    std::fprintf(stderr, "run 'meshcvt --help' (or 'meshcvt COMMAND --help') for usage\n");
+    return 2;
+  } catch (const meshcvt::OptionError& e) {
+    std::fprintf(stderr, "meshcvt: error: %s\n", e.what());
+    return 2;
+  } catch (const meshcvt::Error& e) {
+    std::fprintf(stderr, "meshcvt: error: %s\n", e.what());
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "meshcvt: error: out of memory\n");
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "meshcvt: error: internal: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,58 @@
+// meshcvt: reading and writing meshes (OBJ, OFF, PLY, STL).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "meshcvt/mesh.h"
+
+namespace meshcvt {
+
+/// How a file is turned into a Mesh.
+struct ReadOptions {
+  /// Merge vertices with bit-identical positions (default). Files exported with split normals or UVs
+  /// otherwise fall apart into one component per face.
+  bool weld = true;
+};
+
+/// What reading did to the file's content, for reports.
+struct ReadStats {
+  std::string format;                  ///< "obj", "off", "ply-ascii", "ply-binary-le", "ply-binary-be", "stl-ascii", "stl-binary"
+  uint64_t file_vertices = 0;          ///< vertices as stored in the file
+  uint64_t file_polygons = 0;          ///< faces as stored in the file
+  uint64_t triangulated_polygons = 0;  ///< polygons with more than 3 corners that were split
+  uint64_t welded_vertices = 0;        ///< vertices merged into an earlier one with the same position
+  uint64_t unreferenced_vertices = 0;  ///< vertices no face uses, dropped
+};
+
+/// Reads a triangle mesh; the format comes from the extension (.obj .off .ply .stl, any case).
+/// Polygons are triangulated (fan from the first corner), `Mesh::source_polygon` records where each
+/// triangle came from. Unreferenced vertices are dropped.
+/// Throws FileError (file name + line or byte offset + reason) for anything malformed: missing or
+/// empty file, truncated data, counts that disagree with the data, indices out of range, NaN/Inf
+/// coordinates, non-numeric tokens, faces with fewer than 3 corners, unsupported layouts, and a
+/// mesh with no face.
+Mesh read_mesh(const std::string& path, const ReadOptions& options = {}, ReadStats* stats = nullptr);
+
+/// Per-face data written along with a mesh.
+struct WriteOptions {
+  /// Optional cluster id per face (face_count entries). PLY gets an int `cluster` property and
+  /// uchar red/green/blue colors, distinct between neighbouring ids; other formats ignore it.
+  const std::vector<uint32_t>* face_labels = nullptr;
+  /// PLY only: ASCII instead of binary_little_endian.
+  bool ascii = false;
+};
+
+/// Writes a mesh; the format comes from the extension (.obj .off .ply .stl). The file is written to
+/// a temporary name beside `path` and renamed only when complete: a failure leaves no partial file.
+/// Throws FileError.
+void write_mesh(const std::string& path, const Mesh& mesh, const WriteOptions& options = {});
+
+/// Writes text to `path` atomically (temporary file + rename). Throws FileError.
+void write_text_file(const std::string& path, const std::string& content);
+
+/// A distinct, stable color for a cluster id (r, g, b), shared by every writer.
+void cluster_color(uint32_t id, uint8_t rgb[3]);
+
+}  // namespace meshcvt
