@@ -68,6 +68,7 @@ struct IterationRecord {
   double energy = 0;            ///< metric energy after the iteration, in normalized units (see Clustering)
   uint64_t moves = 0;           ///< faces that changed cluster
   uint64_t evaluated_faces = 0; ///< faces whose cluster edges were tested
+  uint32_t round = 0;           ///< 0 before any repair; k after the k-th repair-and-iterate round
 };
 
 /// What connectivity repair did.

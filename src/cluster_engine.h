@@ -1,0 +1,128 @@
+// meshcvt: internal pieces of the clustering engine, shared by the CPU driver (cluster.cpp) and the
+// GPU driver (host/). Nothing here is public API.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "meshcvt/cluster.h"
+#include "meshcvt/mesh.h"
+#include "meshcvt/topology.h"
+
+namespace meshcvt {
+
+class TriangleBvh;
+class WorkerPool;
+
+/// Cluster sums in 64-bit fixed point, 5 per cluster: W, Sx, Sy, Sz, Q, where
+/// W = sum w_k, S = sum w_k p_k, Q = sum w_k |p_k|^2. Integer sums do not depend on the order of
+/// accumulation, so results are the same for any thread count and on the GPU.
+inline constexpr int kSumComponents = 5;
+
+/// Everything the iteration needs to know about the faces, in normalized coordinates: the mesh's
+/// bounding box is mapped into [0, 1]^3 (uniform scale), so float distances keep their precision
+/// and the fixed-point range is known in advance.
+struct ClusterProblem {
+  Metric metric = Metric::cvt;
+  uint32_t face_count = 0;
+  uint32_t clusters = 0;
+  std::vector<float> point;   ///< 3 per face: centroid (cvt, ccvt) or unit normal (l21)
+  std::vector<float> weight;  ///< per face: rho_k * area, normalized units
+  double fixed_scale = 1;     ///< fixed = llround(value * fixed_scale); |every sum| < 2^62
+  float origin[3] = {0, 0, 0};
+  float extent = 1;           ///< input = origin + extent * normalized
+  std::vector<float> normalized_positions;  ///< ccvt only: vertices in normalized coordinates
+  std::shared_ptr<TriangleBvh> bvh;          ///< ccvt only: closest points on the mesh
+
+  /// The 5 fixed-point contributions of face k (deterministic function of point and weight).
+  void face_fixed(uint32_t k, int64_t out[kSumComponents]) const;
+};
+
+/// Builds the per-face data. Throws OptionError for bad density arrays.
+ClusterProblem make_cluster_problem(const Mesh& mesh, const ClusterOptions& options);
+
+/// Sums of every cluster from scratch.
+std::vector<int64_t> compute_cluster_sums(const ClusterProblem& problem, const std::vector<uint32_t>& labels,
+                                          uint32_t clusters);
+
+/// Generator of one cluster from its sums (cvt: mass centroid; ccvt: closest mesh point to it;
+/// l21: normalized S). Empty clusters (W = 0) keep `g` unchanged. Bit-identical wherever it runs.
+void compute_generator(const ClusterProblem& problem, const int64_t sums[kSumComponents], float g[3]);
+
+/// Energy of one cluster from its sums and generator: Q - 2 g.S + |g|^2 W, in double.
+double cluster_energy(const ClusterProblem& problem, const int64_t sums[kSumComponents], const float g[3]);
+
+/// Energy of a whole labeling computed independently, face by face in double (for tests).
+double labeling_energy(const ClusterProblem& problem, const std::vector<uint32_t>& labels, uint32_t clusters);
+
+/// Initial clustering: exactly `clusters` connected clusters (Section 5.1 or seeded growth).
+std::vector<uint32_t> initial_clustering(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology,
+                                         Init init, uint32_t clusters, uint64_t seed);
+
+/// The boundary-testing iteration (Section 3.1 with configuration-wise updating and the accelerators
+/// of 5.2). Holds labels, sums and generators; step() runs one iteration.
+class BoundaryIteration {
+ public:
+  BoundaryIteration(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology, TopologyMode mode,
+                    bool accelerate, WorkerPool& pool);
+  /// Starts from `labels` (all faces labeled in [0, clusters)): sums, generators, active set.
+  void reset(std::vector<uint32_t> labels);
+  /// One iteration; returns its record (moves, evaluated faces, energy after it).
+  IterationRecord step();
+  double energy() const;
+
+  const std::vector<uint32_t>& labels() const { return labels_; }
+  const std::vector<float>& generators() const { return generators_; }
+  const std::vector<int64_t>& sums() const { return sums_; }
+
+ private:
+  void evaluate_range(size_t begin, size_t end, unsigned worker);
+
+  const ClusterProblem& problem_;
+  const Mesh& mesh_;
+  const Topology& topology_;
+  TopologyMode mode_;
+  bool accelerate_;
+  WorkerPool& pool_;
+
+  std::vector<uint32_t> labels_;
+  std::vector<int64_t> sums_;          // kSumComponents per cluster
+  std::vector<float> generators_;      // 3 per cluster
+  std::vector<uint8_t> cluster_changed_;  // generator changed by the last iteration
+  std::vector<uint8_t> face_dirty_;       // a face whose inputs changed, or whose move was refused
+  std::vector<uint32_t> boundary_faces_;  // faces with a cluster edge (a superset, compacted lazily)
+  std::vector<uint8_t> in_boundary_list_;
+  std::vector<uint32_t> destination_;     // per face: proposed cluster or kNone (scratch)
+  std::vector<uint8_t> proposal_state_;   // per face: 0 none, 1 proposed, 2 passed the disk tests
+  std::vector<std::vector<uint32_t>> worker_moves_;
+  std::vector<uint64_t> worker_evaluated_;
+};
+
+/// The disk tests (a) and (b) of the topology-preserving filter: moving `face` from its cluster to
+/// `destination` keeps the faces of the source cluster in the face's vertex ring non-empty and
+/// edge-connected without it, and the destination's faces in that ring edge-connected.
+bool move_keeps_disks(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels, uint32_t face,
+                      uint32_t destination);
+
+/// Connectivity repair of Section 5.3 (split clusters keep their largest piece, the other pieces go
+/// to the closest adjacent cluster; clusters enclosed by a single other cluster are dissolved).
+/// Returns true when anything changed. Clusters may be left empty.
+bool repair_connectivity(const ClusterProblem& problem, const Topology& topology, const std::vector<float>& generators,
+                         std::vector<uint32_t>& labels, uint32_t clusters, RepairStats& stats);
+
+/// Re-creates empty clusters by splitting the clusters of highest energy in two connected halves.
+/// Returns the number of clusters re-created.
+uint32_t restore_cluster_count(const ClusterProblem& problem, const Topology& topology,
+                               const std::vector<float>& generators, std::vector<uint32_t>& labels,
+                               uint32_t clusters);
+
+/// Checks the final guarantees: every face labeled, every cluster non-empty and connected, and (when
+/// avoidable) adjacent to at least two clusters. Returns counts of violations.
+struct ClusterValidity {
+  uint32_t empty = 0, split = 0, isolated = 0;
+  bool ok() const { return empty == 0 && split == 0 && isolated == 0; }
+};
+ClusterValidity check_clusters(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t clusters);
+
+}  // namespace meshcvt

@@ -1,0 +1,243 @@
+// meshcvt: initial clusterings.
+//
+// Hierarchical: Fan et al. Section 5.1, after Garland, Willmott, Heckbert "Hierarchical face
+// clustering on polygonal surfaces" (I3D 2001). Faces are nodes of the dual graph; contracting a
+// dual edge merges two clusters at the cost
+//     F(e_ij) = (|z_ij - z_i|^2 |V_i| + |z_ij - z_j|^2 |V_j|) / (|V_i| + |V_j|)
+//             = |V_i| |V_j| |z_i - z_j|^2 / (|V_i| + |V_j|)^2,
+// z the cluster's mean point (centroid for cvt/ccvt, mean normal for l21). With n·2^k < F <= n·2^(k+1)
+// the first level contracts down to n·2^k nodes and k more levels halve the count, ending with
+// exactly n connected clusters.
+//
+// Instead of a global priority queue each level runs rounds of "mutually cheapest" contractions: an
+// edge is contracted when it is the cheapest edge of both its endpoints. That is a matching, found
+// in O(E) without sorting (the paper, too, avoids sorting the big early levels), and the cheapest
+// edge overall always qualifies, so every round makes progress. Only the last round of a level,
+// which must stop at the exact node count, sorts its candidates. Total O(F log F) at worst, in
+// practice a few linear passes over shrinking edge lists.
+//
+// Random: seeded region growing (one seed per mesh component first, the rest uniformly at random,
+// grown breadth-first), for comparison.
+#include <algorithm>
+#include <cassert>
+#include <cstring>
+#include <numeric>
+#include <string>
+
+#include "cluster_engine.h"
+#include "meshcvt/error.h"
+
+namespace meshcvt {
+
+namespace {
+
+struct DualEdge {
+  uint32_t a, b;  // a < b, node ids of the current level
+};
+
+struct DualGraph {
+  std::vector<double> weight;  // per node
+  std::vector<double> sum;     // 3 per node: sum of w p
+  std::vector<DualEdge> edges; // may hold duplicates (several mesh edges between two clusters)
+  uint32_t nodes = 0;
+};
+
+float contraction_cost(const DualGraph& g, uint32_t i, uint32_t j) {
+  double wi = g.weight[i], wj = g.weight[j];
+  if (!(wi > 0) || !(wj > 0)) return 0.0f;  // weightless faces merge for free
+  double d2 = 0;
+  for (int c = 0; c < 3; ++c) {
+    double d = g.sum[3 * i + c] / wi - g.sum[3 * j + c] / wj;
+    d2 += d * d;
+  }
+  double w = wi + wj;
+  return float(wi * wj * d2 / (w * w));
+}
+
+// Edge order: cost, then endpoint ids, so that every comparison has one answer.
+bool edge_before(float ca, const DualEdge& a, float cb, const DualEdge& b) {
+  if (ca != cb) return ca < cb;
+  if (a.a != b.a) return a.a < b.a;
+  return a.b < b.b;
+}
+
+// One round: contract up to `wanted` mutually cheapest edges. Returns the new node id of every old
+// node (ids given in increasing order of the lowest old id, so results never depend on hashing or
+// threads) and updates the graph in place.
+std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
+  const size_t ne = g.edges.size();
+  std::vector<float> cost(ne);
+  for (size_t e = 0; e < ne; ++e) cost[e] = contraction_cost(g, g.edges[e].a, g.edges[e].b);
+
+  std::vector<uint32_t> best(g.nodes, kNone);
+  auto offer = [&](uint32_t node, uint32_t e) {
+    uint32_t b = best[node];
+    if (b == kNone || edge_before(cost[e], g.edges[e], cost[b], g.edges[b])) best[node] = e;
+  };
+  for (uint32_t e = 0; e < ne; ++e) {
+    offer(g.edges[e].a, e);
+    offer(g.edges[e].b, e);
+  }
+  std::vector<uint32_t> chosen;
+  for (uint32_t node = 0; node < g.nodes; ++node) {
+    uint32_t e = best[node];
+    if (e == kNone || g.edges[e].a != node) continue;  // consider each edge from its lower end
+    uint32_t other = best[g.edges[e].b];
+    if (other != kNone && g.edges[other].a == node && g.edges[other].b == g.edges[e].b) chosen.push_back(e);
+  }
+  assert(!chosen.empty() || ne == 0);
+  if (chosen.size() > wanted) {
+    std::sort(chosen.begin(), chosen.end(),
+              [&](uint32_t x, uint32_t y) { return edge_before(cost[x], g.edges[x], cost[y], g.edges[y]); });
+    chosen.resize(wanted);
+  }
+
+  // partner of each node in the matching
+  std::vector<uint32_t> partner(g.nodes, kNone);
+  for (uint32_t e : chosen) {
+    partner[g.edges[e].a] = g.edges[e].b;
+    partner[g.edges[e].b] = g.edges[e].a;
+  }
+  std::vector<uint32_t> relabel(g.nodes, kNone);
+  uint32_t next = 0;
+  for (uint32_t node = 0; node < g.nodes; ++node) {
+    if (relabel[node] != kNone) continue;
+    relabel[node] = next;
+    if (partner[node] != kNone) relabel[partner[node]] = next;
+    ++next;
+  }
+  std::vector<double> weight(next, 0.0), sum(3 * size_t(next), 0.0);
+  for (uint32_t node = 0; node < g.nodes; ++node) {
+    uint32_t r = relabel[node];
+    weight[r] += g.weight[node];
+    for (int c = 0; c < 3; ++c) sum[3 * size_t(r) + c] += g.sum[3 * size_t(node) + c];
+  }
+  size_t kept = 0;
+  for (size_t e = 0; e < ne; ++e) {
+    uint32_t a = relabel[g.edges[e].a], b = relabel[g.edges[e].b];
+    if (a == b) continue;
+    g.edges[kept++] = DualEdge{std::min(a, b), std::max(a, b)};
+  }
+  g.edges.resize(kept);
+  g.weight.swap(weight);
+  g.sum.swap(sum);
+  g.nodes = next;
+  return relabel;
+}
+
+std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, const Topology& topology,
+                                              uint32_t clusters) {
+  const uint32_t nf = problem.face_count;
+  std::vector<uint32_t> labels(nf);
+  std::iota(labels.begin(), labels.end(), 0u);
+  if (clusters >= nf) return labels;
+
+  DualGraph g;
+  g.nodes = nf;
+  g.weight.resize(nf);
+  g.sum.resize(3 * size_t(nf));
+  for (uint32_t f = 0; f < nf; ++f) {
+    double w = problem.weight[f];
+    g.weight[f] = w;
+    for (int c = 0; c < 3; ++c) g.sum[3 * size_t(f) + c] = w * double(problem.point[3 * size_t(f) + c]);
+  }
+  g.edges.reserve(size_t(nf) * 3 / 2);
+  for (uint32_t f = 0; f < nf; ++f)
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
+      if (o != kNone && o > f) g.edges.push_back(DualEdge{f, o});
+    }
+
+  // Level targets: n·2^k, n·2^(k-1), ..., n with n·2^k < F <= n·2^(k+1).
+  std::vector<uint32_t> targets;
+  for (uint64_t t = clusters; t < nf; t *= 2) targets.push_back(uint32_t(t));
+  std::reverse(targets.begin(), targets.end());
+
+  std::vector<std::vector<uint32_t>> relabels;
+  for (uint32_t target : targets) {
+    while (g.nodes > target) {
+      if (g.edges.empty())
+        throw OptionError("cannot make " + std::to_string(clusters) + " connected clusters: the face graph has more components");
+      relabels.push_back(contract_round(g, g.nodes - target));
+    }
+  }
+  assert(g.nodes == clusters);
+  // Compose the rounds' relabelings from the last to the first: O(total nodes), not O(F * rounds).
+  for (size_t r = relabels.size(); r-- > 1;) {
+    std::vector<uint32_t>& below = relabels[r - 1];
+    const std::vector<uint32_t>& above = relabels[r];
+    for (uint32_t& id : below) id = above[id];
+  }
+  if (!relabels.empty()) labels = std::move(relabels[0]);
+  return labels;
+}
+
+uint64_t splitmix64(uint64_t& state) {
+  uint64_t z = (state += 0x9e3779b97f4a7c15ull);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+std::vector<uint32_t> random_clustering(const ClusterProblem& problem, const Topology& topology, uint32_t clusters,
+                                        uint64_t seed) {
+  const uint32_t nf = problem.face_count;
+  std::vector<uint32_t> labels(nf, kNone);
+  uint64_t rng = seed;
+  // One seed per component (a random face of it), so every face can be reached.
+  std::vector<uint32_t> component_size(topology.component_count, 0), component_pick(topology.component_count, kNone);
+  for (uint32_t f = 0; f < nf; ++f) {
+    uint32_t c = topology.face_component[f];
+    // reservoir sampling: a uniformly random face per component in one pass
+    if (splitmix64(rng) % ++component_size[c] == 0) component_pick[c] = f;
+  }
+  std::vector<uint32_t> queue;
+  queue.reserve(nf);
+  uint32_t next = 0;
+  for (uint32_t c = 0; c < topology.component_count; ++c) {
+    labels[component_pick[c]] = next++;
+    queue.push_back(component_pick[c]);
+  }
+  // The remaining seeds uniformly among unlabeled faces (partial Fisher-Yates on a candidate list).
+  std::vector<uint32_t> free_faces;
+  free_faces.reserve(nf - next);
+  for (uint32_t f = 0; f < nf; ++f)
+    if (labels[f] == kNone) free_faces.push_back(f);
+  for (size_t i = 0; next < clusters; ++i) {
+    size_t j = i + splitmix64(rng) % (free_faces.size() - i);
+    std::swap(free_faces[i], free_faces[j]);
+    labels[free_faces[i]] = next++;
+    queue.push_back(free_faces[i]);
+  }
+  // Breadth-first growth: a face joins the cluster that reaches it first.
+  for (size_t head = 0; head < queue.size(); ++head) {
+    uint32_t f = queue[head];
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
+      if (o != kNone && labels[o] == kNone) {
+        labels[o] = labels[f];
+        queue.push_back(o);
+      }
+    }
+  }
+  assert(queue.size() == nf);
+  return labels;
+}
+
+}  // namespace
+
+std::vector<uint32_t> initial_clustering(const ClusterProblem& problem, const Mesh& /*mesh*/, const Topology& topology,
+                                         Init init, uint32_t clusters, uint64_t seed) {
+  if (clusters == 0) throw OptionError("the number of clusters must be at least 1");
+  if (clusters > problem.face_count)
+    throw OptionError("cannot make " + std::to_string(clusters) + " clusters from " +
+                      std::to_string(problem.face_count) + " faces");
+  if (clusters < topology.component_count)
+    throw OptionError("cannot make " + std::to_string(clusters) + " connected clusters: the mesh has " +
+                      std::to_string(topology.component_count) +
+                      " connected components (across manifold edges), each needs at least one cluster");
+  return init == Init::hierarchical ? hierarchical_clustering(problem, topology, clusters)
+                                    : random_clustering(problem, topology, clusters, seed);
+}
+
+}  // namespace meshcvt

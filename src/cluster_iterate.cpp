@@ -1,0 +1,284 @@
+// meshcvt: the boundary-testing iteration of Fan et al., Section 3.1 (Section 4 for L2,1), with
+// configuration-wise updating and the accelerators of Section 5.2.
+//
+// One iteration, all decisions reading only the state at its start:
+//  1. Gather (parallel, per face): each face on a cluster border tests its cluster edges with the
+//     four-case rule (boundary_rule.h), the edge oriented so that T_l is the lower face id. The
+//     moves proposed for the face itself are kept; several proposals: the closest destination wins,
+//     ties to the lower cluster id. Every write goes to the face's own slot, so threads never race.
+//  2. Disk filter (TopologyMode::preserving, beyond the paper): a proposal is kept only if
+//     (a) the faces of its source cluster in the moved face's vertex ring stay edge-connected
+//         without it, and non-empty (the source neither splits nor vanishes),
+//     (b) the faces of its destination cluster in that ring are edge-connected (no ring closes
+//         around a hole: a disk stays a disk),
+//     (c) no other proposal that passed (a) and (b), shares a vertex with it and involves one of its
+//         two clusters (as source or destination) has a lower face id. The tests of (a)/(b) read the
+//         ring as it was; (c) makes that true for the two clusters they look at. Restricting (c) to
+//         moves that leave the same cluster is not enough: a face can join D through a neighbour
+//         that leaves D in the same iteration and end up cut off (seen on an icosphere).
+//     Ranking only among proposals that pass (a) and (b) keeps the lowest passing one alive, so the
+//     filter never blocks progress. Every kept move lowers the face's own distance, so any subset
+//     of the rule's moves lowers the energy: the configuration-wise argument of Section 3.1 holds.
+//  3. Apply: labels change at once; each cluster's sums change by its centroid variation
+//     (eq. 8: + sum over V+ of w p, - sum over V- of w p), in 64-bit fixed point, so the result is
+//     independent of the order and of the thread count. Generators are recomputed from the sums.
+//
+// Accelerator (5.2), exact: a face's decision depends only on its label, its edge-neighbours'
+// labels and those clusters' generators. A face is re-tested only if one of these changed in the
+// last iteration, or its own proposal was refused; otherwise it would decide "stay" again. The list
+// of border faces is kept up to date around moved faces (the paper's "potential edges").
+#include <algorithm>
+#include <cassert>
+#include <cstring>
+
+#include "boundary_rule.h"
+#include "cluster_engine.h"
+#include "parallel.h"
+
+namespace meshcvt {
+
+namespace {
+
+enum ProposalState : uint8_t { kNoProposal = 0, kProposed = 1, kPassedDiskTests = 2 };
+
+// Faces sharing a vertex with `face` (itself excluded), sorted, without repeats.
+void gather_vertex_ring(const Mesh& mesh, const Topology& topology, uint32_t face, std::vector<uint32_t>& ring) {
+  ring.clear();
+  for (int j = 0; j < 3; ++j) {
+    uint32_t v = mesh.indices[3 * size_t(face) + j];
+    for (uint32_t i = topology.vertex_face_offsets[v]; i < topology.vertex_face_offsets[v + 1]; ++i)
+      if (topology.vertex_faces[i] != face) ring.push_back(topology.vertex_faces[i]);
+  }
+  std::sort(ring.begin(), ring.end());
+  ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+}
+
+}  // namespace
+
+BoundaryIteration::BoundaryIteration(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology,
+                                     TopologyMode mode, bool accelerate, WorkerPool& pool)
+    : problem_(problem), mesh_(mesh), topology_(topology), mode_(mode), accelerate_(accelerate), pool_(pool) {}
+
+void BoundaryIteration::reset(std::vector<uint32_t> labels) {
+  const uint32_t nf = problem_.face_count, nc = problem_.clusters;
+  labels_ = std::move(labels);
+  assert(labels_.size() == nf);
+  sums_ = compute_cluster_sums(problem_, labels_, nc);
+  generators_.assign(3 * size_t(nc), 0.0f);
+  for (uint32_t c = 0; c < nc; ++c) compute_generator(problem_, &sums_[size_t(c) * kSumComponents], &generators_[3 * c]);
+  cluster_changed_.assign(nc, 1);
+  face_dirty_.assign(nf, 1);
+  destination_.assign(nf, kNone);
+  proposal_state_.assign(nf, kNoProposal);
+  in_boundary_list_.assign(nf, 0);
+  boundary_faces_.clear();
+  for (uint32_t f = 0; f < nf; ++f)
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
+      if (o != kNone && labels_[o] != labels_[f]) {
+        boundary_faces_.push_back(f);
+        in_boundary_list_[f] = 1;
+        break;
+      }
+    }
+  worker_moves_.assign(pool_.size(), {});
+  worker_evaluated_.assign(pool_.size(), 0);
+}
+
+double BoundaryIteration::energy() const {
+  double e = 0;
+  for (uint32_t c = 0; c < problem_.clusters; ++c)
+    e += cluster_energy(problem_, &sums_[size_t(c) * kSumComponents], &generators_[3 * size_t(c)]);
+  return e;
+}
+
+void BoundaryIteration::evaluate_range(size_t begin, size_t end, unsigned worker) {
+  const float* point = problem_.point.data();
+  const float* weight = problem_.weight.data();
+  const float* gen = generators_.data();
+  std::vector<uint32_t>& moves = worker_moves_[worker];
+  uint64_t evaluated = 0;
+  for (size_t i = begin; i < end; ++i) {
+    uint32_t f = boundary_faces_[i];
+    uint32_t p = labels_[f];
+    const uint32_t* adj = &topology_.face_adjacent[3 * size_t(f)];
+    bool border = false, inputs_changed = face_dirty_[f] || cluster_changed_[p];
+    for (int e = 0; e < 3; ++e) {
+      if (adj[e] == kNone) continue;
+      uint32_t q = labels_[adj[e]];
+      if (q == p) continue;
+      border = true;
+      inputs_changed |= cluster_changed_[q] != 0;
+    }
+    if (!border) {
+      in_boundary_list_[f] = 0;  // dropped from the list when it is compacted
+      continue;
+    }
+    if (accelerate_ && !inputs_changed) continue;
+    ++evaluated;
+    face_dirty_[f] = 0;
+    // Test every cluster edge of f; keep the moves the rule decides for f itself.
+    const float* xf = point + 3 * size_t(f);
+    float d_own = squared_distance(xf, gen + 3 * size_t(p));
+    float best_d = 0;
+    uint32_t best = kNone;
+    for (int e = 0; e < 3; ++e) {
+      uint32_t g = adj[e];
+      if (g == kNone) continue;
+      uint32_t q = labels_[g];
+      if (q == p) continue;
+      const float* xg = point + 3 * size_t(g);
+      float d_fq = squared_distance(xf, gen + 3 * size_t(q));
+      float d_gp = squared_distance(xg, gen + 3 * size_t(p));
+      float d_gq = squared_distance(xg, gen + 3 * size_t(q));
+      bool f_moves;
+      if (f < g)  // f is T_l in V_p, g is T_r in V_q
+        f_moves = decide_cluster_edge(d_own, d_fq, d_gp, d_gq, weight[f], weight[g]) == EdgeMove::left_to_q;
+      else        // g is T_l in V_q, f is T_r in V_p
+        f_moves = decide_cluster_edge(d_gq, d_gp, d_fq, d_own, weight[g], weight[f]) == EdgeMove::right_to_p;
+      if (f_moves && (best == kNone || better_destination(d_fq, q, best_d, best))) {
+        best = q;
+        best_d = d_fq;
+      }
+    }
+    if (best != kNone) {
+      destination_[f] = best;
+      proposal_state_[f] = kProposed;
+      moves.push_back(f);
+    }
+  }
+  worker_evaluated_[worker] += evaluated;
+}
+
+// The faces of `cluster` in the vertex ring of `face` (face excluded) are non-empty and edge-connected.
+static bool ring_is_connected(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                              uint32_t face, uint32_t cluster) {
+  thread_local std::vector<uint32_t> ring, members, parent;
+  gather_vertex_ring(mesh, topology, face, ring);
+  members.clear();
+  for (uint32_t g : ring)
+    if (labels[g] == cluster) members.push_back(g);  // sorted, since ring is
+  if (members.empty()) return false;
+  // union-find over the members, joined across their shared edges
+  parent.resize(members.size());
+  for (size_t i = 0; i < members.size(); ++i) parent[i] = uint32_t(i);
+  auto find = [&](uint32_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  size_t pieces = members.size();
+  for (size_t i = 0; i < members.size(); ++i)
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = topology.face_adjacent[3 * size_t(members[i]) + e];
+      if (o == kNone || o < members[i]) continue;
+      auto it = std::lower_bound(members.begin(), members.end(), o);
+      if (it == members.end() || *it != o) continue;
+      uint32_t a = find(uint32_t(i)), b = find(uint32_t(it - members.begin()));
+      if (a != b) {
+        parent[a] = b;
+        --pieces;
+      }
+    }
+  return pieces == 1;
+}
+
+bool move_keeps_disks(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels, uint32_t face,
+                      uint32_t destination) {
+  return ring_is_connected(mesh, topology, labels, face, labels[face]) &&
+         ring_is_connected(mesh, topology, labels, face, destination);
+}
+
+IterationRecord BoundaryIteration::step() {
+  IterationRecord record;
+  std::fill(worker_evaluated_.begin(), worker_evaluated_.end(), 0);
+  for (auto& m : worker_moves_) m.clear();
+
+  // 1. gather proposals
+  pool_.run(boundary_faces_.size(), [&](size_t b, size_t e, unsigned w) { evaluate_range(b, e, w); });
+  std::vector<uint32_t> proposals;
+  for (auto& m : worker_moves_) proposals.insert(proposals.end(), m.begin(), m.end());
+  for (uint64_t n : worker_evaluated_) record.evaluated_faces += n;
+
+  // 2. disk filter
+  std::vector<uint8_t> accepted(proposals.size(), 1);
+  if (mode_ == TopologyMode::preserving && !proposals.empty()) {
+    pool_.run(proposals.size(), [&](size_t b, size_t e, unsigned) {
+      for (size_t i = b; i < e; ++i) {
+        uint32_t f = proposals[i];
+        if (move_keeps_disks(mesh_, topology_, labels_, f, destination_[f])) proposal_state_[f] = kPassedDiskTests;
+      }
+    });
+    pool_.run(proposals.size(), [&](size_t b, size_t e, unsigned) {
+      thread_local std::vector<uint32_t> ring;
+      for (size_t i = b; i < e; ++i) {
+        uint32_t f = proposals[i];
+        if (proposal_state_[f] != kPassedDiskTests) {
+          accepted[i] = 0;
+          continue;
+        }
+        gather_vertex_ring(mesh_, topology_, f, ring);
+        uint32_t from = labels_[f], to = destination_[f];
+        for (uint32_t g : ring) {
+          if (g >= f) break;  // ring is sorted: only lower ids can outrank f
+          if (proposal_state_[g] != kPassedDiskTests) continue;
+          uint32_t g_from = labels_[g], g_to = destination_[g];
+          if (g_from == from || g_from == to || g_to == from || g_to == to) {
+            accepted[i] = 0;
+            break;
+          }
+        }
+      }
+    });
+  }
+
+  // 3. apply all accepted moves at once
+  std::fill(cluster_changed_.begin(), cluster_changed_.end(), 0);
+  int64_t v[kSumComponents];
+  std::vector<uint32_t> moved;
+  moved.reserve(proposals.size());
+  for (size_t i = 0; i < proposals.size(); ++i) {
+    uint32_t f = proposals[i];
+    uint32_t to = destination_[f];
+    destination_[f] = kNone;
+    proposal_state_[f] = kNoProposal;
+    if (!accepted[i]) {
+      face_dirty_[f] = 1;  // refused: the rule still wants it to move, so test it again
+      continue;
+    }
+    uint32_t from = labels_[f];
+    moved.push_back(f);
+    problem_.face_fixed(f, v);
+    int64_t* s_from = &sums_[size_t(from) * kSumComponents];
+    int64_t* s_to = &sums_[size_t(to) * kSumComponents];
+    for (int c = 0; c < kSumComponents; ++c) {
+      s_from[c] -= v[c];
+      s_to[c] += v[c];
+    }
+    cluster_changed_[from] = cluster_changed_[to] = 1;
+    labels_[f] = to;
+  }
+  record.moves = moved.size();
+
+  // Faces around moved ones: their inputs changed, and they may have become border faces.
+  std::erase_if(boundary_faces_, [&](uint32_t f) { return !in_boundary_list_[f]; });
+  auto touch = [&](uint32_t f) {
+    face_dirty_[f] = 1;
+    if (!in_boundary_list_[f]) {
+      in_boundary_list_[f] = 1;
+      boundary_faces_.push_back(f);
+    }
+  };
+  for (uint32_t f : moved) {
+    touch(f);
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
+      if (o != kNone) touch(o);
+    }
+  }
+  for (uint32_t c = 0; c < problem_.clusters; ++c)
+    if (cluster_changed_[c]) compute_generator(problem_, &sums_[size_t(c) * kSumComponents], &generators_[3 * size_t(c)]);
+  record.energy = energy();
+  return record;
+}
+
+}  // namespace meshcvt

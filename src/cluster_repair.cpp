@@ -1,0 +1,247 @@
+// meshcvt: keeping clusters valid — connectivity repair of Fan et al. Section 5.3, restoring the
+// cluster count afterwards, and the validity check behind the final guarantees.
+//
+// Repair: a cluster split into several pieces keeps its largest piece (by weight); the faces of the
+// other pieces go to the closest adjacent cluster (distance to its generator), in rounds that each
+// read the state at their start, so the result does not depend on visiting order. A cluster
+// enclosed by a single other cluster (isolated) is dissolved into it — unless that other cluster
+// touches nobody else either: then the two are all there is in their mesh component, and the
+// situation cannot be avoided.
+//
+// Restore: empty clusters are re-created by splitting the clusters of highest energy in two
+// connected halves grown breadth-first from two far-apart faces.
+#include <algorithm>
+#include <cassert>
+#include <numeric>
+
+#include "boundary_rule.h"
+#include "cluster_engine.h"
+
+namespace meshcvt {
+
+namespace {
+
+struct UnionFind {
+  std::vector<uint32_t> parent;
+  explicit UnionFind(uint32_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+  uint32_t find(uint32_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  }
+  void join(uint32_t a, uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // root = lowest face of the piece
+  }
+};
+
+// Piece (connected part of a cluster) of every face, as the piece's lowest face id.
+std::vector<uint32_t> cluster_pieces(const Topology& topology, const std::vector<uint32_t>& labels) {
+  uint32_t nf = uint32_t(labels.size());
+  UnionFind uf(nf);
+  for (uint32_t f = 0; f < nf; ++f)
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
+      if (o != kNone && o > f && labels[o] == labels[f]) uf.join(f, o);
+    }
+  std::vector<uint32_t> piece(nf);
+  for (uint32_t f = 0; f < nf; ++f) piece[f] = uf.find(f);
+  return piece;
+}
+
+// Sorted, unique list of the clusters adjacent to each cluster, as CSR.
+void cluster_adjacency(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t clusters,
+                       std::vector<uint32_t>& offsets, std::vector<uint32_t>& neighbours) {
+  std::vector<uint64_t> pairs;
+  for (uint32_t f = 0; f < labels.size(); ++f)
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
+      if (o != kNone && labels[o] != labels[f]) pairs.push_back(uint64_t(labels[f]) << 32 | labels[o]);
+    }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  offsets.assign(size_t(clusters) + 1, 0);
+  neighbours.resize(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    ++offsets[(pairs[i] >> 32) + 1];
+    neighbours[i] = uint32_t(pairs[i]);
+  }
+  for (uint32_t c = 0; c < clusters; ++c) offsets[c + 1] += offsets[c];
+}
+
+// Clusters enclosed by exactly one other cluster that itself has other neighbours. A cluster that
+// reaches a boundary (or non-manifold) edge is not enclosed: the end of a strip touches one
+// neighbour and is still a disk.
+std::vector<uint32_t> isolated_clusters(const Topology& topology, const std::vector<uint32_t>& labels,
+                                        uint32_t clusters) {
+  std::vector<uint32_t> offsets, neighbours, result;
+  cluster_adjacency(topology, labels, clusters, offsets, neighbours);
+  std::vector<uint8_t> open(clusters, 0);
+  for (uint32_t f = 0; f < labels.size(); ++f)
+    for (int e = 0; e < 3; ++e)
+      if (topology.face_adjacent[3 * size_t(f) + e] == kNone) open[labels[f]] = 1;
+  for (uint32_t c = 0; c < clusters; ++c) {
+    if (open[c] || offsets[c + 1] - offsets[c] != 1) continue;
+    uint32_t outer = neighbours[offsets[c]];
+    if (offsets[outer + 1] - offsets[outer] >= 2) result.push_back(c);
+  }
+  return result;
+}
+
+}  // namespace
+
+bool repair_connectivity(const ClusterProblem& problem, const Topology& topology, const std::vector<float>& generators,
+                         std::vector<uint32_t>& labels, uint32_t clusters, RepairStats& stats) {
+  const uint32_t nf = problem.face_count;
+  std::vector<uint32_t> piece = cluster_pieces(topology, labels);
+
+  // Largest piece of every cluster, by weight, ties to the lower piece id.
+  std::vector<double> piece_weight(nf, 0.0);
+  for (uint32_t f = 0; f < nf; ++f) piece_weight[piece[f]] += problem.weight[f];
+  std::vector<uint32_t> kept(clusters, kNone);
+  uint64_t pieces_dropped = 0;
+  for (uint32_t f = 0; f < nf; ++f) {
+    if (piece[f] != f) continue;  // visit each piece once, at its lowest face
+    uint32_t c = labels[f];
+    if (kept[c] == kNone) {
+      kept[c] = f;
+    } else {
+      ++pieces_dropped;
+      if (piece_weight[f] > piece_weight[kept[c]]) kept[c] = f;
+    }
+  }
+  std::vector<uint8_t> orphan(nf, 0);
+  uint64_t orphans = 0;
+  for (uint32_t f = 0; f < nf; ++f)
+    if (kept[labels[f]] != piece[f]) orphan[f] = 1, ++orphans;
+
+  // Isolated clusters are dissolved into their enclosing cluster.
+  std::vector<uint32_t> isolated = isolated_clusters(topology, labels, clusters);
+  if (!isolated.empty()) {
+    std::vector<uint8_t> dissolve(clusters, 0);
+    for (uint32_t c : isolated) dissolve[c] = 1;
+    for (uint32_t f = 0; f < nf; ++f)
+      if (dissolve[labels[f]] && !orphan[f]) orphan[f] = 1, ++orphans;
+    stats.dissolved_isolated += uint32_t(isolated.size());
+  }
+  if (orphans == 0) return false;
+  stats.split_pieces += pieces_dropped;
+  stats.reassigned_faces += orphans;
+
+  // Rounds: an orphan next to a settled face joins the closest such neighbouring cluster.
+  std::vector<uint32_t> frontier, next_labels;
+  for (uint64_t left = orphans; left > 0;) {
+    frontier.clear();
+    next_labels.clear();
+    for (uint32_t f = 0; f < nf; ++f) {
+      if (!orphan[f]) continue;
+      uint32_t best = kNone;
+      float best_d = 0;
+      for (int e = 0; e < 3; ++e) {
+        uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
+        if (o == kNone || orphan[o]) continue;
+        uint32_t c = labels[o];
+        float d = squared_distance(&problem.point[3 * size_t(f)], &generators[3 * size_t(c)]);
+        if (best == kNone || better_destination(d, c, best_d, best)) best = c, best_d = d;
+      }
+      if (best != kNone) frontier.push_back(f), next_labels.push_back(best);
+    }
+    // Every orphan piece borders a settled face: a mesh component always keeps a piece, since a
+    // cluster never leaves the component it started in.
+    assert(!frontier.empty());
+    if (frontier.empty()) break;
+    for (size_t i = 0; i < frontier.size(); ++i) {
+      labels[frontier[i]] = next_labels[i];
+      orphan[frontier[i]] = 0;
+    }
+    left -= frontier.size();
+  }
+  return true;
+}
+
+uint32_t restore_cluster_count(const ClusterProblem& problem, const Topology& topology,
+                               const std::vector<float>& generators, std::vector<uint32_t>& labels,
+                               uint32_t clusters) {
+  const uint32_t nf = problem.face_count;
+  uint32_t restored = 0;
+  for (;;) {
+    std::vector<uint32_t> size(clusters, 0);
+    for (uint32_t f = 0; f < nf; ++f) ++size[labels[f]];
+    std::vector<uint32_t> empty;
+    for (uint32_t c = 0; c < clusters; ++c)
+      if (size[c] == 0) empty.push_back(c);
+    if (empty.empty()) return restored;
+    // Energies of the current clusters about their (current) generators.
+    std::vector<double> energy(clusters, 0.0);
+    for (uint32_t f = 0; f < nf; ++f) {
+      uint32_t c = labels[f];
+      energy[c] += double(problem.weight[f]) * squared_distance(&problem.point[3 * size_t(f)], &generators[3 * size_t(c)]);
+    }
+    std::vector<uint32_t> order;
+    for (uint32_t c = 0; c < clusters; ++c)
+      if (size[c] >= 2) order.push_back(c);
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      return energy[a] != energy[b] ? energy[a] > energy[b] : a < b;
+    });
+    size_t splits = std::min(order.size(), empty.size());
+    if (splits == 0) return restored;  // cannot happen while clusters <= faces
+    // faces of each cluster, CSR
+    std::vector<uint32_t> offsets(size_t(clusters) + 1, 0), faces(nf);
+    for (uint32_t c = 0; c < clusters; ++c) offsets[c + 1] = offsets[c] + size[c];
+    std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
+    for (uint32_t f = 0; f < nf; ++f) faces[fill[labels[f]]++] = f;
+    std::vector<uint32_t> queue;
+    for (size_t s = 0; s < splits; ++s) {
+      uint32_t c = order[s], fresh = empty[s];
+      const uint32_t* members = &faces[offsets[c]];
+      uint32_t count = size[c];
+      // seed a: farthest from the generator; seed b: farthest from a (ties: lower face id)
+      uint32_t a = members[0], b = kNone;
+      float da = -1, db = -1;
+      for (uint32_t i = 0; i < count; ++i) {
+        float d = squared_distance(&problem.point[3 * size_t(members[i])], &generators[3 * size_t(c)]);
+        if (d > da) da = d, a = members[i];
+      }
+      for (uint32_t i = 0; i < count; ++i) {
+        if (members[i] == a) continue;
+        float d = squared_distance(&problem.point[3 * size_t(members[i])], &problem.point[3 * size_t(a)]);
+        if (d > db) db = d, b = members[i];
+      }
+      assert(b != kNone);
+      // Two-source breadth-first growth inside c (its faces marked kNone while unclaimed); b's half
+      // becomes the fresh cluster. Faces not reached (c was not connected) stay in c.
+      for (uint32_t i = 0; i < count; ++i) labels[members[i]] = kNone;
+      labels[a] = c;
+      labels[b] = fresh;
+      queue.assign({a, b});
+      for (size_t head = 0; head < queue.size(); ++head) {
+        uint32_t f = queue[head];
+        for (int e = 0; e < 3; ++e) {
+          uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
+          if (o == kNone || labels[o] != kNone) continue;
+          labels[o] = labels[f];
+          queue.push_back(o);
+        }
+      }
+      for (uint32_t i = 0; i < count; ++i)
+        if (labels[members[i]] == kNone) labels[members[i]] = c;
+      ++restored;
+    }
+  }
+}
+
+ClusterValidity check_clusters(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t clusters) {
+  ClusterValidity v;
+  std::vector<uint32_t> piece = cluster_pieces(topology, labels);
+  std::vector<uint32_t> pieces(clusters, 0);
+  for (uint32_t f = 0; f < labels.size(); ++f)
+    if (piece[f] == f) ++pieces[labels[f]];
+  for (uint32_t c = 0; c < clusters; ++c) {
+    if (pieces[c] == 0) ++v.empty;
+    if (pieces[c] > 1) v.split += pieces[c] - 1;
+  }
+  v.isolated = uint32_t(isolated_clusters(topology, labels, clusters).size());
+  return v;
+}
+
+}  // namespace meshcvt
