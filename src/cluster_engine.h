@@ -96,6 +96,7 @@ class BoundaryIteration {
   std::vector<uint32_t> destination_;     // per face: proposed cluster or kNone (scratch)
   std::vector<uint8_t> proposal_state_;   // per face: 0 none, 1 proposed, 2 passed the disk tests
   std::vector<std::vector<uint32_t>> worker_moves_;
+  std::vector<std::vector<uint32_t>> worker_rings_;  // vertex rings of proposals: size, then faces
   std::vector<uint64_t> worker_evaluated_;
 };
 

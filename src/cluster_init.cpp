@@ -42,16 +42,15 @@ struct DualGraph {
   uint32_t nodes = 0;
 };
 
-float contraction_cost(const DualGraph& g, uint32_t i, uint32_t j) {
-  double wi = g.weight[i], wj = g.weight[j];
+// F(e_ij) from the nodes' weights and mean points z = S / W.
+float contraction_cost(const std::vector<double>& weight, const std::vector<double>& mean, uint32_t i, uint32_t j) {
+  double wi = weight[i], wj = weight[j];
   if (!(wi > 0) || !(wj > 0)) return 0.0f;  // weightless faces merge for free
-  double d2 = 0;
-  for (int c = 0; c < 3; ++c) {
-    double d = g.sum[3 * i + c] / wi - g.sum[3 * j + c] / wj;
-    d2 += d * d;
-  }
+  double dx = mean[3 * size_t(i)] - mean[3 * size_t(j)];
+  double dy = mean[3 * size_t(i) + 1] - mean[3 * size_t(j) + 1];
+  double dz = mean[3 * size_t(i) + 2] - mean[3 * size_t(j) + 2];
   double w = wi + wj;
-  return float(wi * wj * d2 / (w * w));
+  return float(wi * wj * (dx * dx + dy * dy + dz * dz) / (w * w));
 }
 
 // Edge order: cost, then endpoint ids, so that every comparison has one answer.
@@ -66,8 +65,11 @@ bool edge_before(float ca, const DualEdge& a, float cb, const DualEdge& b) {
 // threads) and updates the graph in place.
 std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
   const size_t ne = g.edges.size();
+  std::vector<double> mean(3 * size_t(g.nodes));
+  for (uint32_t n = 0; n < g.nodes; ++n)
+    for (int c = 0; c < 3; ++c) mean[3 * size_t(n) + c] = g.weight[n] > 0 ? g.sum[3 * size_t(n) + c] / g.weight[n] : 0.0;
   std::vector<float> cost(ne);
-  for (size_t e = 0; e < ne; ++e) cost[e] = contraction_cost(g, g.edges[e].a, g.edges[e].b);
+  for (size_t e = 0; e < ne; ++e) cost[e] = contraction_cost(g.weight, mean, g.edges[e].a, g.edges[e].b);
 
   std::vector<uint32_t> best(g.nodes, kNone);
   auto offer = [&](uint32_t node, uint32_t e) {
@@ -112,11 +114,30 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
     weight[r] += g.weight[node];
     for (int c = 0; c < 3; ++c) sum[3 * size_t(r) + c] += g.sum[3 * size_t(node) + c];
   }
-  size_t kept = 0;
+  // New edges without self-loops and without repeats (several mesh edges between two merged
+  // clusters), so edge lists shrink with the node count: a counting sort by the lower end, then a
+  // "last seen" mark per upper end. O(E + nodes), no comparison sort.
+  std::vector<uint32_t> start(size_t(next) + 1, 0);
   for (size_t e = 0; e < ne; ++e) {
     uint32_t a = relabel[g.edges[e].a], b = relabel[g.edges[e].b];
-    if (a == b) continue;
-    g.edges[kept++] = DualEdge{std::min(a, b), std::max(a, b)};
+    if (a != b) ++start[std::min(a, b) + 1];
+  }
+  for (uint32_t i = 0; i < next; ++i) start[i + 1] += start[i];
+  std::vector<uint32_t> upper(start[next]);
+  for (size_t e = 0; e < ne; ++e) {
+    uint32_t a = relabel[g.edges[e].a], b = relabel[g.edges[e].b];
+    if (a != b) upper[start[std::min(a, b)]++] = std::max(a, b);
+  }
+  std::vector<uint32_t> last_seen(next, kNone);
+  size_t kept = 0, from = 0;
+  for (uint32_t a = 0; a < next; ++a) {
+    size_t to = start[a];  // after the fill loop, start[a] is the end of a's run
+    for (; from < to; ++from) {
+      uint32_t b = upper[from];
+      if (last_seen[b] == a) continue;
+      last_seen[b] = a;
+      g.edges[kept++] = DualEdge{a, b};
+    }
   }
   g.edges.resize(kept);
   g.weight.swap(weight);

@@ -41,16 +41,63 @@ namespace {
 
 enum ProposalState : uint8_t { kNoProposal = 0, kProposed = 1, kPassedDiskTests = 2 };
 
-// Faces sharing a vertex with `face` (itself excluded), sorted, without repeats.
+// Faces sharing a vertex with `face` (itself excluded), sorted, without repeats. The three vertex
+// lists are sorted already (Topology's CSR), so a merge is enough.
 void gather_vertex_ring(const Mesh& mesh, const Topology& topology, uint32_t face, std::vector<uint32_t>& ring) {
   ring.clear();
+  const uint32_t* begin[3];
+  const uint32_t* end[3];
   for (int j = 0; j < 3; ++j) {
     uint32_t v = mesh.indices[3 * size_t(face) + j];
-    for (uint32_t i = topology.vertex_face_offsets[v]; i < topology.vertex_face_offsets[v + 1]; ++i)
-      if (topology.vertex_faces[i] != face) ring.push_back(topology.vertex_faces[i]);
+    begin[j] = topology.vertex_faces.data() + topology.vertex_face_offsets[v];
+    end[j] = topology.vertex_faces.data() + topology.vertex_face_offsets[v + 1];
   }
-  std::sort(ring.begin(), ring.end());
-  ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+  for (;;) {
+    uint32_t next = kNone;
+    for (int j = 0; j < 3; ++j)
+      if (begin[j] != end[j] && *begin[j] < next) next = *begin[j];
+    if (next == kNone) break;
+    for (int j = 0; j < 3; ++j)
+      if (begin[j] != end[j] && *begin[j] == next) ++begin[j];
+    if (next != face) ring.push_back(next);
+  }
+}
+
+// The faces of `cluster` in `ring` (sorted) are non-empty and edge-connected.
+bool ring_is_connected(const Topology& topology, const std::vector<uint32_t>& labels,
+                       const std::vector<uint32_t>& ring, uint32_t cluster) {
+  thread_local std::vector<uint32_t> members, parent;
+  members.clear();
+  for (uint32_t g : ring)
+    if (labels[g] == cluster) members.push_back(g);  // sorted, since ring is
+  if (members.empty()) return false;
+  // union-find over the members, joined across their shared edges
+  parent.resize(members.size());
+  for (size_t i = 0; i < members.size(); ++i) parent[i] = uint32_t(i);
+  auto find = [&](uint32_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  size_t pieces = members.size();
+  for (size_t i = 0; i < members.size() && pieces > 1; ++i)
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = topology.face_adjacent[3 * size_t(members[i]) + e];
+      if (o == kNone || o < members[i]) continue;
+      auto it = std::lower_bound(members.begin(), members.end(), o);
+      if (it == members.end() || *it != o) continue;
+      uint32_t a = find(uint32_t(i)), b = find(uint32_t(it - members.begin()));
+      if (a != b) {
+        parent[a] = b;
+        --pieces;
+      }
+    }
+  return pieces == 1;
+}
+
+bool ring_keeps_disks(const Topology& topology, const std::vector<uint32_t>& labels, const std::vector<uint32_t>& ring,
+                      uint32_t face, uint32_t destination) {
+  return ring_is_connected(topology, labels, ring, labels[face]) &&
+         ring_is_connected(topology, labels, ring, destination);
 }
 
 }  // namespace
@@ -82,6 +129,7 @@ void BoundaryIteration::reset(std::vector<uint32_t> labels) {
       }
     }
   worker_moves_.assign(pool_.size(), {});
+  worker_rings_.assign(pool_.size(), {});
   worker_evaluated_.assign(pool_.size(), 0);
 }
 
@@ -150,42 +198,11 @@ void BoundaryIteration::evaluate_range(size_t begin, size_t end, unsigned worker
   worker_evaluated_[worker] += evaluated;
 }
 
-// The faces of `cluster` in the vertex ring of `face` (face excluded) are non-empty and edge-connected.
-static bool ring_is_connected(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
-                              uint32_t face, uint32_t cluster) {
-  thread_local std::vector<uint32_t> ring, members, parent;
-  gather_vertex_ring(mesh, topology, face, ring);
-  members.clear();
-  for (uint32_t g : ring)
-    if (labels[g] == cluster) members.push_back(g);  // sorted, since ring is
-  if (members.empty()) return false;
-  // union-find over the members, joined across their shared edges
-  parent.resize(members.size());
-  for (size_t i = 0; i < members.size(); ++i) parent[i] = uint32_t(i);
-  auto find = [&](uint32_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  size_t pieces = members.size();
-  for (size_t i = 0; i < members.size(); ++i)
-    for (int e = 0; e < 3; ++e) {
-      uint32_t o = topology.face_adjacent[3 * size_t(members[i]) + e];
-      if (o == kNone || o < members[i]) continue;
-      auto it = std::lower_bound(members.begin(), members.end(), o);
-      if (it == members.end() || *it != o) continue;
-      uint32_t a = find(uint32_t(i)), b = find(uint32_t(it - members.begin()));
-      if (a != b) {
-        parent[a] = b;
-        --pieces;
-      }
-    }
-  return pieces == 1;
-}
-
 bool move_keeps_disks(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels, uint32_t face,
                       uint32_t destination) {
-  return ring_is_connected(mesh, topology, labels, face, labels[face]) &&
-         ring_is_connected(mesh, topology, labels, face, destination);
+  std::vector<uint32_t> ring;
+  gather_vertex_ring(mesh, topology, face, ring);
+  return ring_keeps_disks(topology, labels, ring, face, destination);
 }
 
 IterationRecord BoundaryIteration::step() {
@@ -202,23 +219,34 @@ IterationRecord BoundaryIteration::step() {
   // 2. disk filter
   std::vector<uint8_t> accepted(proposals.size(), 1);
   if (mode_ == TopologyMode::preserving && !proposals.empty()) {
-    pool_.run(proposals.size(), [&](size_t b, size_t e, unsigned) {
+    // Each proposal's vertex ring is gathered once and kept (per worker, flat) for test (c).
+    std::vector<uint32_t> ring_begin(proposals.size() + 1), ring_worker(proposals.size());
+    for (auto& r : worker_rings_) r.clear();
+    pool_.run(proposals.size(), [&](size_t b, size_t e, unsigned w) {
+      thread_local std::vector<uint32_t> ring;
+      std::vector<uint32_t>& store = worker_rings_[w];
       for (size_t i = b; i < e; ++i) {
         uint32_t f = proposals[i];
-        if (move_keeps_disks(mesh_, topology_, labels_, f, destination_[f])) proposal_state_[f] = kPassedDiskTests;
+        gather_vertex_ring(mesh_, topology_, f, ring);
+        ring_worker[i] = w;
+        ring_begin[i] = uint32_t(store.size());
+        store.push_back(uint32_t(ring.size()));
+        store.insert(store.end(), ring.begin(), ring.end());
+        if (ring_keeps_disks(topology_, labels_, ring, f, destination_[f])) proposal_state_[f] = kPassedDiskTests;
       }
     });
     pool_.run(proposals.size(), [&](size_t b, size_t e, unsigned) {
-      thread_local std::vector<uint32_t> ring;
       for (size_t i = b; i < e; ++i) {
         uint32_t f = proposals[i];
         if (proposal_state_[f] != kPassedDiskTests) {
           accepted[i] = 0;
           continue;
         }
-        gather_vertex_ring(mesh_, topology_, f, ring);
+        const uint32_t* ring = &worker_rings_[ring_worker[i]][ring_begin[i]];
+        uint32_t ring_size = *ring++;
         uint32_t from = labels_[f], to = destination_[f];
-        for (uint32_t g : ring) {
+        for (uint32_t k = 0; k < ring_size; ++k) {
+          uint32_t g = ring[k];
           if (g >= f) break;  // ring is sorted: only lower ids can outrank f
           if (proposal_state_[g] != kPassedDiskTests) continue;
           uint32_t g_from = labels_[g], g_to = destination_[g];
