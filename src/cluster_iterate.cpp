@@ -63,7 +63,8 @@ void gather_vertex_ring(const Mesh& mesh, const Topology& topology, uint32_t fac
   }
 }
 
-// The faces of `cluster` in `ring` (sorted) are non-empty and edge-connected.
+// The faces of `cluster` in `ring` (sorted) are non-empty and edge-connected. General version,
+// for rings of any size (a vertex of high valence).
 bool ring_is_connected(const Topology& topology, const std::vector<uint32_t>& labels,
                        const std::vector<uint32_t>& ring, uint32_t cluster) {
   thread_local std::vector<uint32_t> members, parent;
@@ -71,7 +72,6 @@ bool ring_is_connected(const Topology& topology, const std::vector<uint32_t>& la
   for (uint32_t g : ring)
     if (labels[g] == cluster) members.push_back(g);  // sorted, since ring is
   if (members.empty()) return false;
-  // union-find over the members, joined across their shared edges
   parent.resize(members.size());
   for (size_t i = 0; i < members.size(); ++i) parent[i] = uint32_t(i);
   auto find = [&](uint32_t i) {
@@ -94,10 +94,51 @@ bool ring_is_connected(const Topology& topology, const std::vector<uint32_t>& la
   return pieces == 1;
 }
 
+// Connectivity of a set given as a bit mask over `members`, with adjacency as masks.
+bool mask_is_connected(const uint64_t* adjacent, uint64_t set) {
+  if (set == 0) return false;
+  uint64_t reached = set & (~set + 1);  // lowest member
+  uint64_t frontier = reached;
+  while (frontier) {
+    uint64_t next = 0;
+    for (uint64_t f = frontier; f; f &= f - 1) next |= adjacent[__builtin_ctzll(f)];
+    next &= set & ~reached;
+    reached |= next;
+    frontier = next;
+  }
+  return reached == set;
+}
+
 bool ring_keeps_disks(const Topology& topology, const std::vector<uint32_t>& labels, const std::vector<uint32_t>& ring,
                       uint32_t face, uint32_t destination) {
-  return ring_is_connected(topology, labels, ring, labels[face]) &&
-         ring_is_connected(topology, labels, ring, destination);
+  const uint32_t source = labels[face];
+  // Only faces of the two clusters matter; up to 64 of them (nearly always) are tested with bit
+  // masks, larger rings (vertices of high valence) with union-find.
+  uint32_t members[64];
+  uint64_t in_source = 0, in_destination = 0;
+  size_t count = 0;
+  for (uint32_t g : ring) {
+    uint32_t l = labels[g];
+    if (l != source && l != destination) continue;
+    if (count == 64)
+      return ring_is_connected(topology, labels, ring, source) && ring_is_connected(topology, labels, ring, destination);
+    (l == source ? in_source : in_destination) |= uint64_t(1) << count;
+    members[count++] = g;
+  }
+  if (in_source == 0 || in_destination == 0) return false;
+  uint64_t adjacent[64];
+  for (size_t i = 0; i < count; ++i) {
+    uint64_t bits = 0;
+    uint32_t g = members[i], l = labels[g];
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = topology.face_adjacent[3 * size_t(g) + e];
+      if (o == kNone || labels[o] != l || o == face) continue;  // only same-cluster links count
+      const uint32_t* it = std::lower_bound(members, members + count, o);
+      if (it != members + count && *it == o) bits |= uint64_t(1) << (it - members);
+    }
+    adjacent[i] = bits;
+  }
+  return mask_is_connected(adjacent, in_source) && mask_is_connected(adjacent, in_destination);
 }
 
 }  // namespace
