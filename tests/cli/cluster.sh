@@ -1,0 +1,95 @@
+#!/usr/bin/env bash
+# CLI test of `meshcvt cluster`: outputs (PLY with cluster ids, labels file, JSON report), the
+# labels' meaning checked independently (exactly n ids, every cluster edge-connected), polygons in
+# the input expanded in order, and clean errors for bad options and bad files.
+# Usage: cluster.sh /path/to/meshcvt /path/to/tests/data
+set -u
+meshcvt=$1
+data=$2
+fail() { echo "FAIL: $*" >&2; exit 1; }
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+
+"$meshcvt" cluster "$data/elephant.off" -n 50 -o "$tmp/out.ply" --labels "$tmp/labels.txt" \
+  --report "$tmp/report.json" --device cpu >"$tmp/stdout" 2>"$tmp/stderr" || fail "cluster failed: $(cat "$tmp/stderr")"
+[ -s "$tmp/out.ply" ] || fail "no output mesh"
+grep -q "50 clusters" "$tmp/stdout" || fail "summary line missing: $(cat "$tmp/stdout")"
+ls "$tmp" | grep -q tmp && fail "a temporary file was left behind"
+
+python3 - "$data/elephant.off" "$tmp/labels.txt" "$tmp/report.json" "$tmp/out.ply" <<'PY' || fail "output check failed"
+import json, sys
+off, labels_path, report_path, ply = sys.argv[1:]
+# faces from the OFF file itself (independent of meshcvt's reader)
+tokens = [t for line in open(off) for t in line.split('#')[0].split()]
+assert tokens[0] == 'OFF'
+nv, nf = int(tokens[1]), int(tokens[2])
+pos = 4 + 3 * nv
+faces = []
+for _ in range(nf):
+    k = int(tokens[pos]); faces.append([int(x) for x in tokens[pos + 1:pos + 1 + k]]); pos += 1 + k
+labels = [int(l) for l in open(labels_path)]
+assert len(labels) == nf, (len(labels), nf)
+assert sorted(set(labels)) == list(range(50)), "not exactly 50 cluster ids"
+# every cluster edge-connected (across edges shared by exactly two faces)
+edges = {}
+for f, fv in enumerate(faces):
+    for i in range(3):
+        e = tuple(sorted((fv[i], fv[(i + 1) % 3])))
+        edges.setdefault(e, []).append(f)
+parent = list(range(nf))
+def find(x):
+    while parent[x] != x:
+        parent[x] = parent[parent[x]]; x = parent[x]
+    return x
+for fs in edges.values():
+    if len(fs) == 2 and labels[fs[0]] == labels[fs[1]]:
+        parent[find(fs[0])] = find(fs[1])
+pieces = len({(labels[f], find(f)) for f in range(nf)})
+assert pieces == 50, f"{pieces} pieces for 50 clusters"
+r = json.load(open(report_path))
+assert r['faces'] == nf and r['options']['clusters'] == 50
+assert r['iterations'] == len(r['history']) - 1
+energies = [h['energy'] for h in r['history'] if h['round'] == 0]
+assert all(b <= a * (1 + 1e-9) for a, b in zip(energies, energies[1:])), "energy rose"
+assert r['device'].startswith('cpu')
+head = open(ply, 'rb').read(400).decode('latin1')
+assert 'property int cluster' in head and 'property uchar red' in head, head
+PY
+
+# polygons: a quad mesh gives one label per triangle, in the input's order (quad -> 2 triangles)
+cat >"$tmp/quads.obj" <<'OBJ'
+v 0 0 0
+v 1 0 0
+v 2 0 0
+v 0 1 0
+v 1 1 0
+v 2 1 0
+v 0 2 0
+v 1 2 0
+v 2 2 0
+f 1 2 5 4
+f 2 3 6 5
+f 4 5 8 7
+f 5 6 9 8
+OBJ
+"$meshcvt" cluster "$tmp/quads.obj" -n 2 -o "$tmp/q.ply" --labels "$tmp/q.txt" -q || fail "quad mesh failed"
+[ "$(wc -l <"$tmp/q.txt")" -eq 8 ] || fail "quad mesh: expected 8 triangle labels"
+
+# same result with 1 and 2 threads
+"$meshcvt" cluster "$data/elephant.off" -n 50 -o "$tmp/t1.ply" --labels "$tmp/t1.txt" --threads 1 -q || fail "threads 1"
+cmp -s "$tmp/t1.txt" "$tmp/labels.txt" || fail "labels differ between 1 and default threads"
+
+# errors: exit 2 for bad usage, 1 for bad files; messages name the problem; no output left behind
+"$meshcvt" cluster "$data/elephant.off" -n 0 -o "$tmp/bad.ply" 2>"$tmp/err"; rc=$?
+[ $rc -eq 2 ] || fail "-n 0: expected exit 2, got $rc"
+grep -q "^meshcvt: error:" "$tmp/err" || fail "-n 0: no error line"
+"$meshcvt" cluster "$data/elephant.off" -n 99999999 -o "$tmp/bad.ply" 2>"$tmp/err"; rc=$?
+[ $rc -eq 2 ] || fail "-n too large: expected exit 2, got $rc"
+grep -q "5558 faces" "$tmp/err" || fail "-n too large: message should name the face count: $(cat "$tmp/err")"
+"$meshcvt" cluster "$data/elephant.off" -n 10 --metric nonsense -o "$tmp/bad.ply" 2>"$tmp/err"; rc=$?
+[ $rc -eq 2 ] || fail "bad metric: expected exit 2, got $rc"
+"$meshcvt" cluster "$tmp/missing.off" -n 10 -o "$tmp/bad.ply" 2>"$tmp/err"; rc=$?
+[ $rc -eq 1 ] || fail "missing file: expected exit 1, got $rc"
+grep -q "missing.off" "$tmp/err" || fail "missing file: message should name the file"
+[ ! -e "$tmp/bad.ply" ] || fail "an output was written despite the error"
+echo "cluster CLI: all checks passed"
