@@ -78,6 +78,8 @@ class BoundaryIteration {
 
  private:
   void evaluate_range(size_t begin, size_t end, unsigned worker);
+  void collect_active_faces();
+  bool is_border(uint32_t face) const;
 
   const ClusterProblem& problem_;
   const Mesh& mesh_;
@@ -89,10 +91,14 @@ class BoundaryIteration {
   std::vector<uint32_t> labels_;
   std::vector<int64_t> sums_;          // kSumComponents per cluster
   std::vector<float> generators_;      // 3 per cluster
-  std::vector<uint8_t> cluster_changed_;  // generator changed by the last iteration
-  std::vector<uint8_t> face_dirty_;       // a face whose inputs changed, or whose move was refused
-  std::vector<uint32_t> boundary_faces_;  // faces with a cluster edge (a superset, compacted lazily)
-  std::vector<uint8_t> in_boundary_list_;
+  std::vector<uint8_t> cluster_changed_;     // flag per cluster, set for those in changed_clusters_
+  std::vector<uint32_t> changed_clusters_;   // clusters whose generator the last iteration changed
+  std::vector<uint32_t> dirty_faces_;        // faces moved, next to a move, or refused last time
+  std::vector<std::vector<uint32_t>> border_lists_;  // per cluster: its border faces (lazily compacted)
+  std::vector<uint32_t> list_owner_;         // per face: the cluster whose border list holds it, or kNone
+  std::vector<uint32_t> active_;             // faces to test in this iteration
+  std::vector<uint32_t> active_stamp_, list_stamp_;  // dedupe marks, compared with stamp_
+  uint32_t stamp_ = 0;
   std::vector<uint32_t> destination_;     // per face: proposed cluster or kNone (scratch)
   std::vector<uint8_t> proposal_state_;   // per face: 0 none, 1 proposed, 2 passed the disk tests
   std::vector<std::vector<uint32_t>> worker_moves_;

@@ -154,20 +154,22 @@ void BoundaryIteration::reset(std::vector<uint32_t> labels) {
   sums_ = compute_cluster_sums(problem_, labels_, nc);
   generators_.assign(3 * size_t(nc), 0.0f);
   for (uint32_t c = 0; c < nc; ++c) compute_generator(problem_, &sums_[size_t(c) * kSumComponents], &generators_[3 * c]);
-  cluster_changed_.assign(nc, 1);
-  face_dirty_.assign(nf, 1);
   destination_.assign(nf, kNone);
   proposal_state_.assign(nf, kNoProposal);
-  in_boundary_list_.assign(nf, 0);
-  boundary_faces_.clear();
+  // Every cluster counts as changed: the first iteration tests every border face.
+  cluster_changed_.assign(nc, 1);
+  changed_clusters_.resize(nc);
+  for (uint32_t c = 0; c < nc; ++c) changed_clusters_[c] = c;
+  dirty_faces_.clear();
+  active_stamp_.assign(nf, 0);
+  list_stamp_.assign(nf, 0);
+  stamp_ = 0;
+  border_lists_.assign(nc, {});
+  list_owner_.assign(nf, kNone);
   for (uint32_t f = 0; f < nf; ++f)
-    for (int e = 0; e < 3; ++e) {
-      uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
-      if (o != kNone && labels_[o] != labels_[f]) {
-        boundary_faces_.push_back(f);
-        in_boundary_list_[f] = 1;
-        break;
-      }
+    if (is_border(f)) {
+      border_lists_[labels_[f]].push_back(f);
+      list_owner_[f] = labels_[f];
     }
   worker_moves_.assign(pool_.size(), {});
   worker_rings_.assign(pool_.size(), {});
@@ -181,6 +183,54 @@ double BoundaryIteration::energy() const {
   return e;
 }
 
+bool BoundaryIteration::is_border(uint32_t f) const {
+  const uint32_t* adj = &topology_.face_adjacent[3 * size_t(f)];
+  uint32_t p = labels_[f];
+  return (adj[0] != kNone && labels_[adj[0]] != p) || (adj[1] != kNone && labels_[adj[1]] != p) ||
+         (adj[2] != kNone && labels_[adj[2]] != p);
+}
+
+// The faces to test this iteration: faces marked dirty by the last one (moved, next to a move, or
+// refused), and the border faces of every cluster whose generator changed together with their
+// neighbours across the border (their decisions read that generator). Without the accelerator,
+// every border face. Each cluster's border list is compacted on the way (faces that left or
+// stopped being border faces are dropped; they are re-added when a move touches them).
+void BoundaryIteration::collect_active_faces() {
+  active_.clear();
+  ++stamp_;
+  auto add = [&](uint32_t f) {
+    if (active_stamp_[f] != stamp_) {
+      active_stamp_[f] = stamp_;
+      active_.push_back(f);
+    }
+  };
+  auto scan = [&](uint32_t c, bool with_neighbours) {
+    std::vector<uint32_t>& list = border_lists_[c];
+    size_t kept = 0;
+    for (uint32_t f : list) {
+      if (labels_[f] != c || list_stamp_[f] == stamp_ || !is_border(f)) {
+        if (labels_[f] == c && list_stamp_[f] != stamp_) list_owner_[f] = kNone;  // no longer a border face
+        continue;
+      }
+      list_stamp_[f] = stamp_;
+      list[kept++] = f;
+      add(f);
+      if (!with_neighbours) continue;
+      for (int e = 0; e < 3; ++e) {
+        uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
+        if (o != kNone && labels_[o] != c) add(o);
+      }
+    }
+    list.resize(kept);
+  };
+  if (!accelerate_) {
+    for (uint32_t c = 0; c < problem_.clusters; ++c) scan(c, false);
+    return;
+  }
+  for (uint32_t f : dirty_faces_) add(f);
+  for (uint32_t c : changed_clusters_) scan(c, true);
+}
+
 void BoundaryIteration::evaluate_range(size_t begin, size_t end, unsigned worker) {
   const float* point = problem_.point.data();
   const float* weight = problem_.weight.data();
@@ -188,24 +238,11 @@ void BoundaryIteration::evaluate_range(size_t begin, size_t end, unsigned worker
   std::vector<uint32_t>& moves = worker_moves_[worker];
   uint64_t evaluated = 0;
   for (size_t i = begin; i < end; ++i) {
-    uint32_t f = boundary_faces_[i];
+    uint32_t f = active_[i];
     uint32_t p = labels_[f];
     const uint32_t* adj = &topology_.face_adjacent[3 * size_t(f)];
-    bool border = false, inputs_changed = face_dirty_[f] || cluster_changed_[p];
-    for (int e = 0; e < 3; ++e) {
-      if (adj[e] == kNone) continue;
-      uint32_t q = labels_[adj[e]];
-      if (q == p) continue;
-      border = true;
-      inputs_changed |= cluster_changed_[q] != 0;
-    }
-    if (!border) {
-      in_boundary_list_[f] = 0;  // dropped from the list when it is compacted
-      continue;
-    }
-    if (accelerate_ && !inputs_changed) continue;
+    if (!is_border(f)) continue;
     ++evaluated;
-    face_dirty_[f] = 0;
     // Test every cluster edge of f; keep the moves the rule decides for f itself.
     const float* xf = point + 3 * size_t(f);
     float d_own = squared_distance(xf, gen + 3 * size_t(p));
@@ -252,7 +289,8 @@ IterationRecord BoundaryIteration::step() {
   for (auto& m : worker_moves_) m.clear();
 
   // 1. gather proposals
-  pool_.run(boundary_faces_.size(), [&](size_t b, size_t e, unsigned w) { evaluate_range(b, e, w); });
+  collect_active_faces();
+  pool_.run(active_.size(), [&](size_t b, size_t e, unsigned w) { evaluate_range(b, e, w); });
   std::vector<uint32_t> proposals;
   for (auto& m : worker_moves_) proposals.insert(proposals.end(), m.begin(), m.end());
   for (uint64_t n : worker_evaluated_) record.evaluated_faces += n;
@@ -301,17 +339,25 @@ IterationRecord BoundaryIteration::step() {
   }
 
   // 3. apply all accepted moves at once
-  std::fill(cluster_changed_.begin(), cluster_changed_.end(), 0);
+  for (uint32_t c : changed_clusters_) cluster_changed_[c] = 0;
+  changed_clusters_.clear();
+  dirty_faces_.clear();
   int64_t v[kSumComponents];
   std::vector<uint32_t> moved;
   moved.reserve(proposals.size());
+  auto mark_changed = [&](uint32_t c) {
+    if (!cluster_changed_[c]) {
+      cluster_changed_[c] = 1;
+      changed_clusters_.push_back(c);
+    }
+  };
   for (size_t i = 0; i < proposals.size(); ++i) {
     uint32_t f = proposals[i];
     uint32_t to = destination_[f];
     destination_[f] = kNone;
     proposal_state_[f] = kNoProposal;
     if (!accepted[i]) {
-      face_dirty_[f] = 1;  // refused: the rule still wants it to move, so test it again
+      dirty_faces_.push_back(f);  // refused: the rule still wants it to move, so test it again
       continue;
     }
     uint32_t from = labels_[f];
@@ -323,18 +369,18 @@ IterationRecord BoundaryIteration::step() {
       s_from[c] -= v[c];
       s_to[c] += v[c];
     }
-    cluster_changed_[from] = cluster_changed_[to] = 1;
+    mark_changed(from);
+    mark_changed(to);
     labels_[f] = to;
   }
   record.moves = moved.size();
 
-  // Faces around moved ones: their inputs changed, and they may have become border faces.
-  std::erase_if(boundary_faces_, [&](uint32_t f) { return !in_boundary_list_[f]; });
+  // Moved faces and their neighbours: inputs changed, and they may have become border faces.
   auto touch = [&](uint32_t f) {
-    face_dirty_[f] = 1;
-    if (!in_boundary_list_[f]) {
-      in_boundary_list_[f] = 1;
-      boundary_faces_.push_back(f);
+    dirty_faces_.push_back(f);
+    if (list_owner_[f] != labels_[f] && is_border(f)) {
+      list_owner_[f] = labels_[f];
+      border_lists_[labels_[f]].push_back(f);
     }
   };
   for (uint32_t f : moved) {
@@ -344,8 +390,8 @@ IterationRecord BoundaryIteration::step() {
       if (o != kNone) touch(o);
     }
   }
-  for (uint32_t c = 0; c < problem_.clusters; ++c)
-    if (cluster_changed_[c]) compute_generator(problem_, &sums_[size_t(c) * kSumComponents], &generators_[3 * size_t(c)]);
+  for (uint32_t c : changed_clusters_)
+    compute_generator(problem_, &sums_[size_t(c) * kSumComponents], &generators_[3 * size_t(c)]);
   record.energy = energy();
   return record;
 }
