@@ -10,10 +10,11 @@
 // exactly n connected clusters.
 //
 // Instead of a global priority queue each level runs rounds of "mutually cheapest" contractions: an
-// edge is contracted when it is the cheapest edge of both its endpoints. That is a matching, found
-// in O(E) without sorting (the paper, too, avoids sorting the big early levels), and the cheapest
-// edge overall always qualifies, so every round makes progress. Only the last round of a level,
-// which must stop at the exact node count, sorts its candidates. Total O(F log F) at worst, in
+// edge is contracted when it is the cheapest edge of both its endpoints (among nodes not matched
+// yet in the round, repeated until the matching is maximal). That is a matching found in O(E)
+// without sorting (the paper, too, avoids sorting the big early levels), and the cheapest edge
+// overall always qualifies, so every round makes progress. Only a round that would overshoot the
+// level's exact node count sorts its candidates. Total O(F log F) at worst, in
 // practice a few linear passes over shrinking edge lists.
 //
 // Random: seeded region growing (one seed per mesh component first, the rest uniformly at random,
@@ -71,21 +72,36 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
   std::vector<float> cost(ne);
   for (size_t e = 0; e < ne; ++e) cost[e] = contraction_cost(g.weight, mean, g.edges[e].a, g.edges[e].b);
 
-  std::vector<uint32_t> best(g.nodes, kNone);
-  auto offer = [&](uint32_t node, uint32_t e) {
-    uint32_t b = best[node];
-    if (b == kNone || edge_before(cost[e], g.edges[e], cost[b], g.edges[b])) best[node] = e;
-  };
-  for (uint32_t e = 0; e < ne; ++e) {
-    offer(g.edges[e].a, e);
-    offer(g.edges[e].b, e);
-  }
-  std::vector<uint32_t> chosen;
-  for (uint32_t node = 0; node < g.nodes; ++node) {
-    uint32_t e = best[node];
-    if (e == kNone || g.edges[e].a != node) continue;  // consider each edge from its lower end
-    uint32_t other = best[g.edges[e].b];
-    if (other != kNone && g.edges[other].a == node && g.edges[other].b == g.edges[e].b) chosen.push_back(e);
+  // Passes of "mutually cheapest among the still unmatched" grow a matching until it is maximal
+  // (or big enough): the costs stay those of the round's start, so one round does the work of
+  // several without recomputing them.
+  std::vector<uint32_t> best(g.nodes);
+  std::vector<uint8_t> matched(g.nodes, 0);
+  std::vector<uint32_t> chosen, open_edges(ne);
+  for (uint32_t e = 0; e < ne; ++e) open_edges[e] = e;
+  for (int pass = 0; pass < 8 && chosen.size() < wanted && !open_edges.empty(); ++pass) {
+    std::fill(best.begin(), best.end(), kNone);
+    auto offer = [&](uint32_t node, uint32_t e) {
+      uint32_t b = best[node];
+      if (b == kNone || edge_before(cost[e], g.edges[e], cost[b], g.edges[b])) best[node] = e;
+    };
+    size_t kept = 0;
+    for (uint32_t e : open_edges) {
+      if (matched[g.edges[e].a] || matched[g.edges[e].b]) continue;
+      open_edges[kept++] = e;
+      offer(g.edges[e].a, e);
+      offer(g.edges[e].b, e);
+    }
+    open_edges.resize(kept);
+    size_t before = chosen.size();
+    for (uint32_t e : open_edges) {
+      uint32_t a = g.edges[e].a, b = g.edges[e].b;
+      if (best[a] != e) continue;  // consider each edge once, from its lower end's choice
+      uint32_t other = best[b];
+      if (other != kNone && g.edges[other].a == a && g.edges[other].b == b) chosen.push_back(e);
+    }
+    if (chosen.size() == before) break;
+    for (size_t i = before; i < chosen.size(); ++i) matched[g.edges[chosen[i]].a] = matched[g.edges[chosen[i]].b] = 1;
   }
   assert(!chosen.empty() || ne == 0);
   if (chosen.size() > wanted) {
