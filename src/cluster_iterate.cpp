@@ -126,6 +126,17 @@ bool ring_keeps_disks(const Topology& topology, const std::vector<uint32_t>& lab
     members[count++] = g;
   }
   if (in_source == 0 || in_destination == 0) return false;
+  // member id -> position, open addressing in 128 slots (at most half full)
+  uint32_t slot_face[128];
+  uint8_t slot_index[128];
+  std::fill(slot_face, slot_face + 128, kNone);
+  auto slot_of = [](uint32_t f) { return (f * 0x9E3779B1u) >> 25; };
+  for (size_t i = 0; i < count; ++i) {
+    uint32_t h = slot_of(members[i]);
+    while (slot_face[h] != kNone) h = (h + 1) & 127;
+    slot_face[h] = members[i];
+    slot_index[h] = uint8_t(i);
+  }
   uint64_t adjacent[64];
   for (size_t i = 0; i < count; ++i) {
     uint64_t bits = 0;
@@ -133,8 +144,11 @@ bool ring_keeps_disks(const Topology& topology, const std::vector<uint32_t>& lab
     for (int e = 0; e < 3; ++e) {
       uint32_t o = topology.face_adjacent[3 * size_t(g) + e];
       if (o == kNone || labels[o] != l || o == face) continue;  // only same-cluster links count
-      const uint32_t* it = std::lower_bound(members, members + count, o);
-      if (it != members + count && *it == o) bits |= uint64_t(1) << (it - members);
+      for (uint32_t h = slot_of(o); slot_face[h] != kNone; h = (h + 1) & 127)
+        if (slot_face[h] == o) {
+          bits |= uint64_t(1) << slot_index[h];
+          break;
+        }
     }
     adjacent[i] = bits;
   }
