@@ -8,6 +8,7 @@
 
 #include "cluster_engine.h"
 #include "meshcvt/cluster.h"
+#include "meshcvt/device.h"
 #include "meshcvt/error.h"
 #include "parallel.h"
 
@@ -26,7 +27,7 @@ constexpr uint32_t kMaxRepairRounds = 8;
 constexpr uint32_t kStallLimit = 16;
 
 // Runs iterations until no face moves (true), max_iterations, or a stall (false).
-bool iterate(BoundaryIteration& it, const ClusterOptions& options, uint32_t round, Clustering& out) {
+bool iterate(IterationEngine& it, const ClusterOptions& options, uint32_t round, Clustering& out) {
   double best = it.energy();
   uint32_t stalled = 0;
   for (uint32_t i = 0; i < options.max_iterations; ++i) {
@@ -54,18 +55,18 @@ Clustering cluster(const Mesh& mesh, const ClusterOptions& options) {
 
 Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOptions& options) {
   auto t_start = Clock::now();
-  std::string device = options.device;
-  if (device.empty()) {
-    const char* env = std::getenv("MESHCVT_DEVICE");
-    device = env && *env ? env : "auto";
-  }
-  if (device != "auto" && device != "cpu")
-    throw DeviceError("device '" + device + "': this build of meshcvt has no GPU engine; use --device cpu");
+  DeviceChoice choice = resolve_device(options.device);
 
   Clustering out;
+  out.device_notice = choice.notice;
   ClusterProblem problem = make_cluster_problem(mesh, options);
   WorkerPool pool(options.threads);
-  out.device = "cpu (" + std::to_string(pool.size()) + (pool.size() == 1 ? " thread)" : " threads)");
+  std::unique_ptr<IterationEngine> engine;
+  if (choice.use_gpu)
+    engine = make_gpu_iteration(problem, mesh, topology, options.topology, options.accelerate, choice.device_index);
+  else
+    engine = std::make_unique<BoundaryIteration>(problem, mesh, topology, options.topology, options.accelerate, pool);
+  out.device = engine->description();
   out.timings.setup = seconds_since(t_start);
 
   auto t = Clock::now();
@@ -74,7 +75,7 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
   out.timings.init = seconds_since(t);
   if (options.progress) options.progress(ClusterProgress{"init", 0, 0});
 
-  BoundaryIteration it(problem, mesh, topology, options.topology, options.accelerate, pool);
+  IterationEngine& it = *engine;
   it.reset(std::move(labels));
   out.history.push_back(IterationRecord{it.energy(), 0, 0, 0});
 

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "meshcvt/cluster.h"
@@ -60,20 +61,41 @@ double labeling_energy(const ClusterProblem& problem, const std::vector<uint32_t
 std::vector<uint32_t> initial_clustering(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology,
                                          Init init, uint32_t clusters, uint64_t seed);
 
-/// The boundary-testing iteration (Section 3.1 with configuration-wise updating and the accelerators
-/// of 5.2). Holds labels, sums and generators; step() runs one iteration.
-class BoundaryIteration {
+/// One engine running the boundary-testing iteration: the CPU's BoundaryIteration below, or the
+/// GPU's (host/). Both must take exactly the same decisions; the driver in cluster.cpp does the rest
+/// (rounds, repair, restoring n) with the same code for both.
+class IterationEngine {
+ public:
+  virtual ~IterationEngine() = default;
+  /// Starts from `labels` (all faces labeled in [0, clusters)): sums, generators, active set.
+  virtual void reset(std::vector<uint32_t> labels) = 0;
+  /// One iteration; returns its record (moves, evaluated faces, energy after it).
+  virtual IterationRecord step() = 0;
+  /// Energy of the current state from the cluster sums and generators (cluster_energy summed).
+  virtual double energy() const = 0;
+  virtual const std::vector<uint32_t>& labels() const = 0;
+  virtual const std::vector<float>& generators() const = 0;
+  /// e.g. "cpu (2 threads)" or the GPU's name.
+  virtual std::string description() const = 0;
+};
+
+/// The GPU engine on Vulkan device `device_index` (host/gpu_engine.cpp). Throws DeviceError.
+std::unique_ptr<IterationEngine> make_gpu_iteration(const ClusterProblem& problem, const Mesh& mesh,
+                                                    const Topology& topology, TopologyMode mode, bool accelerate,
+                                                    int device_index);
+
+/// The boundary-testing iteration on the CPU (Section 3.1 with configuration-wise updating and the
+/// accelerators of 5.2). Holds labels, sums and generators; step() runs one iteration.
+class BoundaryIteration final : public IterationEngine {
  public:
   BoundaryIteration(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology, TopologyMode mode,
                     bool accelerate, WorkerPool& pool);
-  /// Starts from `labels` (all faces labeled in [0, clusters)): sums, generators, active set.
-  void reset(std::vector<uint32_t> labels);
-  /// One iteration; returns its record (moves, evaluated faces, energy after it).
-  IterationRecord step();
-  double energy() const;
-
-  const std::vector<uint32_t>& labels() const { return labels_; }
-  const std::vector<float>& generators() const { return generators_; }
+  void reset(std::vector<uint32_t> labels) override;
+  IterationRecord step() override;
+  double energy() const override;
+  const std::vector<uint32_t>& labels() const override { return labels_; }
+  const std::vector<float>& generators() const override { return generators_; }
+  std::string description() const override;
   const std::vector<int64_t>& sums() const { return sums_; }
 
  private:

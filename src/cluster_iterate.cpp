@@ -30,6 +30,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cstring>
+#include <string>
 
 #include "boundary_rule.h"
 #include "cluster_engine.h"
@@ -188,6 +189,10 @@ void BoundaryIteration::reset(std::vector<uint32_t> labels) {
   worker_moves_.assign(pool_.size(), {});
   worker_rings_.assign(pool_.size(), {});
   worker_evaluated_.assign(pool_.size(), 0);
+}
+
+std::string BoundaryIteration::description() const {
+  return "cpu (" + std::to_string(pool_.size()) + (pool_.size() == 1 ? " thread)" : " threads)");
 }
 
 double BoundaryIteration::energy() const {

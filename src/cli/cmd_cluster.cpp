@@ -87,6 +87,7 @@ void run_cluster(const ClusterArgs& a) {
   Topology topology = build_topology(mesh);
   Clustering c = cluster(mesh, topology, options);
   if (progress) std::fprintf(stderr, "\r%60s\r", "");
+  if (!c.device_notice.empty() && !a.quiet) std::fprintf(stderr, "meshcvt: note: %s\n", c.device_notice.c_str());
 
   t0 = Clock::now();
   WriteOptions wo;

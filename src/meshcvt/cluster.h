@@ -97,6 +97,7 @@ struct Clustering {
   RepairStats repair;
   ClusterTimings timings;
   std::string device;       ///< which engine ran, e.g. "cpu (2 threads)" or the GPU's name
+  std::string device_notice;  ///< one line when --device auto fell back to the CPU engine; else empty
 };
 
 /// Clusters the faces of `mesh` into exactly options.clusters connected clusters.
