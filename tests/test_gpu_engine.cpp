@@ -1,0 +1,257 @@
+// Tests of the GPU clustering engine (host/gpu_engine.cpp, shaders/cluster_*.comp): from the same
+// initial clustering it must take exactly the CPU engine's decisions — same moves in every
+// iteration, same energy history bit for bit, same labels face for face and same generators — on
+// closed, open, multi-component, non-manifold and real scanned meshes, every metric, small to large
+// cluster counts, both topology modes, with and without the accelerator; and the validation layer
+// must stay silent (scripts/test.sh sets MESHCVT_VALIDATION=1).
+//
+// GPU tests need a Vulkan device (lavapipe from mesa-vulkan-drivers is enough); without one they
+// fail with a message saying so, unless MESHCVT_SKIP_GPU_TESTS=1 skips them.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "cluster_engine.h"
+#include "meshcvt/cluster.h"
+#include "meshcvt/device.h"
+#include "meshcvt/error.h"
+#include "meshcvt/io.h"
+#include "meshcvt/topology.h"
+#include "parallel.h"
+#include "test_meshes.h"
+#include "vk_context.h"
+
+using namespace meshcvt;
+
+namespace {
+
+bool skip_gpu_tests() {
+  const char* value = std::getenv("MESHCVT_SKIP_GPU_TESTS");
+  return value && std::strcmp(value, "1") == 0;
+}
+
+// The device the tests run on: the one "gpu" picks (lavapipe on CI).
+int gpu_device() {
+  std::vector<DeviceInfo> devices;
+  try {
+    devices = list_devices();
+  } catch (const DeviceError& e) {
+    FAIL("GPU tests need a Vulkan device (" << e.what() << "); or set MESHCVT_SKIP_GPU_TESTS=1");
+  }
+  if (devices.empty())
+    FAIL("GPU tests need a Vulkan device: install mesa-vulkan-drivers (lavapipe), or set MESHCVT_SKIP_GPU_TESTS=1");
+  DeviceChoice choice = resolve_device("gpu", devices);
+  REQUIRE(choice.use_gpu);
+  return choice.device_index;
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+// A disc whose centre vertex has `spokes` faces around it, plus an outer ring of quads: vertex rings
+// far beyond 64 faces, the disk filter's slow path on the CPU and the large member array on the GPU.
+Mesh fan(uint32_t spokes) {
+  Mesh m;
+  const double pi = 3.14159265358979323846;
+  uint32_t centre = test::add_vertex(m, 0, 0, 0.2);
+  for (uint32_t ring = 1; ring <= 2; ++ring)
+    for (uint32_t i = 0; i < spokes; ++i) {
+      double a = 2 * pi * i / spokes + 0.3 * ring;
+      test::add_vertex(m, ring * std::cos(a), ring * std::sin(a), 0.05 * std::sin(5 * a) * ring);
+    }
+  for (uint32_t i = 0; i < spokes; ++i) {
+    uint32_t a = 1 + i, b = 1 + (i + 1) % spokes, c = 1 + spokes + i, d = 1 + spokes + (i + 1) % spokes;
+    test::add_triangle(m, centre, a, b);
+    test::add_triangle(m, a, c, d);
+    test::add_triangle(m, a, d, b);
+  }
+  return m;
+}
+
+struct NamedMesh {
+  const char* name;
+  Mesh mesh;
+};
+
+// Runs the CPU and the GPU engine side by side from the same initial clustering and compares every
+// iteration; with `reset_again`, resets both to a perturbed state and compares again (as after the
+// driver's repair). Returns the number of faces moved in all (so callers can check moves happened).
+uint64_t compare_engines(const Mesh& mesh, const Topology& topology, Metric metric, uint32_t clusters,
+                         TopologyMode mode, bool accelerate, int device, bool reset_again = true) {
+  ClusterOptions options;
+  options.clusters = clusters;
+  options.metric = metric;
+  ClusterProblem problem = make_cluster_problem(mesh, options);
+  std::vector<uint32_t> initial = initial_clustering(problem, mesh, topology, Init::hierarchical, clusters, 1);
+
+  WorkerPool pool(2);
+  BoundaryIteration cpu(problem, mesh, topology, mode, accelerate, pool);
+  std::unique_ptr<IterationEngine> gpu = make_gpu_iteration(problem, mesh, topology, mode, accelerate, device);
+  cpu.reset(initial);
+  gpu->reset(initial);
+  REQUIRE(same_bits(cpu.energy(), gpu->energy()));
+  REQUIRE(cpu.generators() == gpu->generators());
+
+  uint64_t moves = 0;
+  for (uint32_t iterations = 0; iterations < 300; ++iterations) {
+    IterationRecord c = cpu.step();
+    IterationRecord g = gpu->step();
+    moves += c.moves;
+    INFO("iteration " << iterations);
+    REQUIRE(c.moves == g.moves);
+    REQUIRE(same_bits(c.energy, g.energy));
+    // The GPU tests a superset of the CPU's active set (exact either way).
+    CHECK(g.evaluated_faces >= c.evaluated_faces);
+    if (iterations % 7 == 3) REQUIRE(cpu.labels() == gpu->labels());  // labels come down mid-run too
+    if (c.moves == 0) break;
+  }
+  REQUIRE(cpu.labels() == gpu->labels());
+  REQUIRE(cpu.generators() == gpu->generators());
+  REQUIRE(same_bits(cpu.energy(), gpu->energy()));
+  if (!reset_again) return moves;
+
+  // A second reset (as after the driver's repair) from a state both engines reach differently: the
+  // converged labels with a few faces relabeled to a neighbour's cluster.
+  std::vector<uint32_t> perturbed = cpu.labels();
+  for (uint32_t f = 0; f < problem.face_count; f += 37) {
+    uint32_t o = topology.face_adjacent[3 * size_t(f)];
+    if (o != kNone) perturbed[f] = perturbed[o];
+  }
+  cpu.reset(perturbed);
+  gpu->reset(perturbed);
+  for (uint32_t i = 0; i < 300; ++i) {
+    IterationRecord c = cpu.step();
+    IterationRecord g = gpu->step();
+    INFO("after reset, iteration " << i);
+    REQUIRE(c.moves == g.moves);
+    REQUIRE(same_bits(c.energy, g.energy));
+    moves += c.moves;
+    if (c.moves == 0) break;
+  }
+  REQUIRE(cpu.labels() == gpu->labels());
+  REQUIRE(cpu.generators() == gpu->generators());
+  return moves;
+}
+
+// Every metric x cluster counts {2, 17, 200, F/4} (those the mesh can take) in preserving mode; the
+// paper's mode for 17 and F/4 (keeps the suite fast on lavapipe).
+void compare_on_mesh(const NamedMesh& m) {
+  if (skip_gpu_tests()) return;
+  const int device = gpu_device();
+  const uint64_t messages_before = vk::validation_message_count();
+  Topology topology = build_topology(m.mesh);
+  uint32_t components = 0;
+  for (uint32_t c : topology.face_component) components = std::max(components, c + 1);
+  const uint32_t nf = uint32_t(m.mesh.face_count());
+  uint64_t moves = 0;
+  for (Metric metric : {Metric::cvt, Metric::ccvt, Metric::l21})
+    for (uint32_t clusters : {2u, 17u, 200u, nf / 4}) {
+      if (clusters < components || clusters > nf) continue;
+      for (TopologyMode mode : {TopologyMode::preserving, TopologyMode::paper}) {
+        if (mode == TopologyMode::paper && clusters != 17 && clusters != nf / 4) continue;
+        CAPTURE(std::string(m.name));
+        CAPTURE(std::string(to_string(metric)));
+        CAPTURE(clusters);
+        CAPTURE(std::string(to_string(mode)));
+        moves += compare_engines(m.mesh, topology, metric, clusters, mode, true, device, clusters == 17);
+      }
+    }
+  CHECK(moves > 0);  // the engines had decisions to agree on
+  CHECK(vk::validation_message_count() == messages_before);
+}
+
+}  // namespace
+
+TEST_CASE("gpu engine equals the CPU engine: sphere") { compare_on_mesh({"sphere", test::icosphere(3)}); }
+TEST_CASE("gpu engine equals the CPU engine: torus") { compare_on_mesh({"torus", test::torus(36, 18)}); }
+TEST_CASE("gpu engine equals the CPU engine: open grid") {
+  compare_on_mesh({"open grid", test::grid(28, 24, 1.3, 1, 0.08)});
+}
+TEST_CASE("gpu engine equals the CPU engine: two components") {
+  compare_on_mesh({"two components", test::combine(test::icosphere(2), test::torus(24, 12), 3)});
+}
+TEST_CASE("gpu engine equals the CPU engine: non-manifold edges") {
+  compare_on_mesh({"non-manifold wall", test::grid_with_wall(24)});
+}
+TEST_CASE("gpu engine equals the CPU engine: scanned elephant") {
+  compare_on_mesh({"elephant", read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off")});
+}
+
+TEST_CASE("gpu engine: without the accelerator, and on vertex rings beyond 64 faces") {
+  if (skip_gpu_tests()) return;
+  const int device = gpu_device();
+  const uint64_t messages_before = vk::validation_message_count();
+  {
+    Mesh m = test::torus(30, 14);
+    Topology t = build_topology(m);
+    for (TopologyMode mode : {TopologyMode::preserving, TopologyMode::paper}) {
+      CAPTURE(std::string(to_string(mode)));
+      CHECK(compare_engines(m, t, Metric::cvt, 23, mode, false, device) > 0);
+    }
+  }
+  Mesh m = fan(150);  // the centre vertex has 150 faces
+  Topology t = build_topology(m);
+  for (Metric metric : {Metric::cvt, Metric::l21})
+    for (uint32_t clusters : {2u, 9u, 40u}) {
+      CAPTURE(std::string(to_string(metric)));
+      CAPTURE(clusters);
+      CHECK(compare_engines(m, t, metric, clusters, TopologyMode::preserving, true, device) > 0);
+    }
+  CHECK(vk::validation_message_count() == messages_before);
+}
+
+TEST_CASE("gpu engine: cluster() with device \"gpu\" equals device \"cpu\" end to end") {
+  if (skip_gpu_tests()) return;
+  gpu_device();
+  const uint64_t messages_before = vk::validation_message_count();
+  Mesh elephant = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
+  struct Case {
+    const Mesh* mesh;
+    Metric metric;
+    uint32_t clusters;
+    TopologyMode mode;
+  };
+  Mesh walls = test::grid_with_wall(20);
+  for (const Case& k : {Case{&elephant, Metric::cvt, 300, TopologyMode::preserving},
+                        Case{&elephant, Metric::l21, 40, TopologyMode::paper},  // repair rounds run
+                        Case{&walls, Metric::ccvt, 30, TopologyMode::paper}}) {
+    ClusterOptions o;
+    o.clusters = k.clusters;
+    o.metric = k.metric;
+    o.topology = k.mode;
+    o.device = "cpu";
+    Clustering cpu = cluster(*k.mesh, o);
+    o.device = "gpu";
+    Clustering gpu = cluster(*k.mesh, o);
+    CAPTURE(std::string(to_string(k.metric)));
+    CAPTURE(k.clusters);
+    CHECK(gpu.device != cpu.device);
+    CHECK(gpu.labels == cpu.labels);
+    CHECK(gpu.generators == cpu.generators);
+    CHECK(gpu.iterations == cpu.iterations);
+    CHECK(gpu.converged == cpu.converged);
+    CHECK(gpu.repair.rounds == cpu.repair.rounds);
+    REQUIRE(gpu.history.size() == cpu.history.size());
+    for (size_t i = 0; i < cpu.history.size(); ++i) {
+      CHECK(gpu.history[i].moves == cpu.history[i].moves);
+      CHECK(same_bits(gpu.history[i].energy, cpu.history[i].energy));
+    }
+    ClusterValidity v = check_clusters(build_topology(*k.mesh), gpu.labels, k.clusters);
+    CHECK(v.ok());
+  }
+  CHECK(vk::validation_message_count() == messages_before);
+}
+
+TEST_CASE("gpu engine: a bad device index is a DeviceError") {
+  if (skip_gpu_tests()) return;
+  Mesh m = test::icosphere(1);
+  Topology t = build_topology(m);
+  ClusterOptions o;
+  o.clusters = 4;
+  ClusterProblem p = make_cluster_problem(m, o);
+  CHECK_THROWS_AS(make_gpu_iteration(p, m, t, TopologyMode::preserving, true, 999), DeviceError);
+  CHECK_THROWS_AS(make_gpu_iteration(p, m, t, TopologyMode::preserving, true, -1), DeviceError);
+}
