@@ -24,11 +24,19 @@ struct ReadStats {
   uint64_t triangulated_polygons = 0;  ///< polygons with more than 3 corners that were split
   uint64_t welded_vertices = 0;        ///< vertices merged into an earlier one with the same position
   uint64_t unreferenced_vertices = 0;  ///< vertices no face uses, dropped
+  // file_vertices == mesh.vertex_count() + welded_vertices + unreferenced_vertices.
+  // file_polygons counts faces (STL: facets); the mesh has file_polygons triangles plus one more
+  // per extra corner of each triangulated polygon.
 };
 
 /// Reads a triangle mesh; the format comes from the extension (.obj .off .ply .stl, any case).
 /// Polygons are triangulated (fan from the first corner), `Mesh::source_polygon` records where each
-/// triangle came from. Unreferenced vertices are dropped.
+/// triangle came from; it is left empty (identity) when every face of the file was a triangle.
+/// Vertices keep the file's order (a welded vertex takes the place of its first occurrence);
+/// unreferenced vertices are dropped. Positions are converted to float (PLY doubles are rounded).
+/// OBJ: v/f statements only (v, v/vt, v/vt/vn, v//vn corners, negative = relative indices);
+/// OFF: [ST][C][N][n]OFF, data line based; PLY: ascii and binary of either byte order, a `face`
+/// element with a `vertex_indices` or `vertex_index` list; STL: ascii and binary (told apart by size).
 /// Throws FileError (file name + line or byte offset + reason) for anything malformed: missing or
 /// empty file, truncated data, counts that disagree with the data, indices out of range, NaN/Inf
 /// coordinates, non-numeric tokens, faces with fewer than 3 corners, unsupported layouts, and a
@@ -46,13 +54,18 @@ struct WriteOptions {
 
 /// Writes a mesh; the format comes from the extension (.obj .off .ply .stl). The file is written to
 /// a temporary name beside `path` and renamed only when complete: a failure leaves no partial file.
-/// Throws FileError.
+/// Text formats write 9 significant digits, so reading the file back gives the same floats.
+/// PLY: vertex float x y z, face `list uchar int vertex_indices`; STL: binary, with facet normals.
+/// Throws FileError (cannot create, write or rename; unknown extension), and OptionError before
+/// creating anything when the mesh is inconsistent (index out of range, arrays not in threes) or
+/// face_labels does not have one entry per face.
 void write_mesh(const std::string& path, const Mesh& mesh, const WriteOptions& options = {});
 
 /// Writes text to `path` atomically (temporary file + rename). Throws FileError.
 void write_text_file(const std::string& path, const std::string& content);
 
-/// A distinct, stable color for a cluster id (r, g, b), shared by every writer.
+/// A distinct, stable color for a cluster id (r, g, b), shared by every writer. Consecutive ids get
+/// hues about 137 degrees apart (golden ratio); kNone (no cluster) is grey 128.
 void cluster_color(uint32_t id, uint8_t rgb[3]);
 
 }  // namespace meshcvt

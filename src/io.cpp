@@ -1,0 +1,585 @@
+// meshcvt: mesh file I/O front end. Picks the reader or writer from the file extension, turns a
+// reader's raw triangles into a Mesh (welding vertices with identical positions, dropping
+// unreferenced vertices, both keeping first-occurrence order), writes files atomically
+// (temporary file + rename) and hosts the number and token helpers the format files share.
+#include "meshcvt/io.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <new>
+#include <system_error>
+#include <utility>
+
+#include "io_internal.h"
+
+namespace meshcvt {
+namespace io {
+
+// ---------------------------------------------------------------------------------------------
+// Reading files
+
+static std::string error_text(int error_number) { return std::strerror(error_number); }
+
+FileData read_file(const std::string& path) {
+  FileData file;
+  file.path = path;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw FileError(path, "cannot open: " + error_text(errno));
+  struct FdCloser {
+    int fd;
+    ~FdCloser() { ::close(fd); }
+  } closer{fd};
+
+  struct stat info;
+  if (::fstat(fd, &info) != 0) throw FileError(path, "cannot read: " + error_text(errno));
+  if (S_ISDIR(info.st_mode)) throw FileError(path, "cannot read: is a directory");
+
+  // Regular files are read in one go into a buffer of their size; pipes and other special files
+  // (st_size 0) grow the buffer as they go.
+  size_t capacity = S_ISREG(info.st_mode) ? static_cast<size_t>(info.st_size) : size_t(1) << 16;
+  try {
+    file.bytes.reset(new char[capacity + 1]);
+  } catch (const std::bad_alloc&) {
+    throw FileError(path, "not enough memory to read " + std::to_string(capacity) + " bytes");
+  }
+  for (;;) {
+    if (file.size == capacity) {
+      if (S_ISREG(info.st_mode)) {
+        // The file may have grown since fstat; peek one byte to find out.
+        char probe;
+        const ssize_t got = ::read(fd, &probe, 1);
+        if (got < 0 && errno == EINTR) continue;
+        if (got < 0) throw FileError(path, "cannot read: " + error_text(errno));
+        if (got == 0) break;
+        const size_t grown = capacity * 2 + 4096;
+        std::unique_ptr<char[]> bigger(new char[grown + 1]);
+        std::memcpy(bigger.get(), file.bytes.get(), file.size);
+        bigger[file.size++] = probe;
+        file.bytes = std::move(bigger);
+        capacity = grown;
+        continue;
+      }
+      const size_t grown = capacity * 2;
+      std::unique_ptr<char[]> bigger(new char[grown + 1]);
+      std::memcpy(bigger.get(), file.bytes.get(), file.size);
+      file.bytes = std::move(bigger);
+      capacity = grown;
+    }
+    const ssize_t got = ::read(fd, file.bytes.get() + file.size, capacity - file.size);
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) throw FileError(path, "cannot read: " + error_text(errno));
+    if (got == 0) break;
+    file.size += static_cast<size_t>(got);
+  }
+  file.bytes[file.size] = '\0';
+  if (file.size == 0) throw FileError(path, "empty file");
+  return file;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tokens and numbers
+
+uint64_t TextCursor::last_line() const {
+  // At the end of a text that ends with a line break, `line` already counts the empty line after
+  // it; an editor shows the break as the end of the previous line.
+  if (line > 1 && p >= end && is_line_end(end[-1])) return line - 1;
+  return line;
+}
+
+// True when a syntactically valid decimal float token (as from_chars accepted it) has a magnitude
+// below 1, i.e. an out-of-range result is an underflow rather than an overflow.
+static bool decimal_magnitude_below_one(std::string_view token) {
+  size_t i = 0;
+  if (i < token.size() && (token[i] == '+' || token[i] == '-')) ++i;
+  int64_t exponent10 = -1;  // decimal exponent of the first non-zero digit
+  bool seen_nonzero = false, in_fraction = false;
+  int64_t integer_digits = 0, leading_fraction_zeros = 0;
+  for (; i < token.size(); ++i) {
+    const char c = token[i];
+    if (c == '.') {
+      in_fraction = true;
+    } else if (c >= '0' && c <= '9') {
+      if (!in_fraction) {
+        if (seen_nonzero || c != '0') {
+          seen_nonzero = true;
+          ++integer_digits;
+        }
+      } else if (!seen_nonzero) {
+        if (c == '0') {
+          ++leading_fraction_zeros;
+        } else {
+          seen_nonzero = true;
+        }
+      }
+    } else {
+      break;  // 'e' or 'E'
+    }
+  }
+  if (!seen_nonzero) return true;
+  exponent10 = integer_digits > 0 ? integer_digits - 1 : -(leading_fraction_zeros + 1);
+  if (i < token.size()) {
+    ++i;  // the 'e'
+    bool negative = false;
+    if (i < token.size() && (token[i] == '+' || token[i] == '-')) negative = token[i++] == '-';
+    int64_t e = 0;
+    for (; i < token.size() && token[i] >= '0' && token[i] <= '9'; ++i)
+      e = std::min<int64_t>(e * 10 + (token[i] - '0'), int64_t(1) << 40);
+    exponent10 += negative ? -e : e;
+  }
+  return exponent10 < 0;
+}
+
+NumberStatus parse_float(std::string_view token, float& value) {
+  const char* p = token.data();
+  const char* end = p + token.size();
+  if (p == end) return NumberStatus::not_a_number;
+  if (*p == '+') {
+    ++p;  // from_chars refuses a plus sign
+    if (p == end || *p == '+' || *p == '-') return NumberStatus::not_a_number;
+  }
+  float parsed = 0;
+  const std::from_chars_result result = std::from_chars(p, end, parsed, std::chars_format::general);
+  if (result.ptr != end || result.ec == std::errc::invalid_argument) {
+    // "nan" / "inf" prefixes ("nanx") are still not numbers; only a complete match is accepted.
+    return NumberStatus::not_a_number;
+  }
+  if (result.ec == std::errc::result_out_of_range) {
+    if (decimal_magnitude_below_one(std::string_view(p, static_cast<size_t>(end - p)))) {
+      value = *p == '-' ? -0.0f : 0.0f;
+      return NumberStatus::ok;
+    }
+    return NumberStatus::out_of_range;
+  }
+  if (!std::isfinite(parsed)) return NumberStatus::not_finite;
+  value = parsed;
+  return NumberStatus::ok;
+}
+
+NumberStatus parse_int(std::string_view token, int64_t& value) {
+  const char* p = token.data();
+  const char* end = p + token.size();
+  if (p == end) return NumberStatus::not_a_number;
+  if (*p == '+') {
+    ++p;
+    if (p == end || *p == '-') return NumberStatus::not_a_number;
+  }
+  const std::from_chars_result result = std::from_chars(p, end, value);
+  if (result.ptr != end || result.ec == std::errc::invalid_argument) return NumberStatus::not_a_number;
+  if (result.ec == std::errc::result_out_of_range) return NumberStatus::out_of_range;
+  return NumberStatus::ok;
+}
+
+NumberStatus parse_count(std::string_view token, uint64_t& value) {
+  const char* p = token.data();
+  const char* end = p + token.size();
+  if (p == end) return NumberStatus::not_a_number;
+  if (*p == '+') ++p;
+  if (p == end || *p < '0' || *p > '9') return NumberStatus::not_a_number;
+  const std::from_chars_result result = std::from_chars(p, end, value);
+  if (result.ptr != end || result.ec == std::errc::invalid_argument) return NumberStatus::not_a_number;
+  if (result.ec == std::errc::result_out_of_range) return NumberStatus::out_of_range;
+  return NumberStatus::ok;
+}
+
+std::string quote(std::string_view token) {
+  constexpr size_t kMaxShown = 40;
+  std::string out = "'";
+  for (size_t i = 0; i < token.size() && i < kMaxShown; ++i) {
+    const unsigned char c = static_cast<unsigned char>(token[i]);
+    if (c >= 0x20 && c < 0x7f && c != '\'' && c != '\\') {
+      out += static_cast<char>(c);
+    } else {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\x%02x", c);
+      out += escaped;
+    }
+  }
+  if (token.size() > kMaxShown) out += "...";
+  out += "'";
+  return out;
+}
+
+bool equals_ignoring_case(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    char x = a[i], y = b[i];
+    if (x >= 'A' && x <= 'Z') x = static_cast<char>(x - 'A' + 'a');
+    if (y >= 'A' && y <= 'Z') y = static_cast<char>(y - 'A' + 'a');
+    if (x != y) return false;
+  }
+  return true;
+}
+
+std::string lower_extension(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  const size_t dot = path.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+  std::string ext = path.substr(dot);
+  for (char& c : ext) {
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  }
+  return ext;
+}
+
+bool host_is_little_endian() {
+  const uint16_t one = 1;
+  unsigned char first;
+  std::memcpy(&first, &one, 1);
+  return first == 1;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Welding and compaction
+
+// Position bits with -0.0 folded into +0.0, so the two weld together.
+static inline uint32_t position_key(float value) {
+  uint32_t bits;
+  std::memcpy(&bits, &value, 4);
+  return bits == 0x80000000u ? 0u : bits;
+}
+
+static inline uint32_t hash_position(const uint32_t key[3]) {
+  // MurmurHash2 mixing of the three 32-bit words: cheap and spreads grid-like coordinates.
+  const uint32_t m = 0x5bd1e995u;
+  uint32_t h = 0x9747b28cu;
+  for (int i = 0; i < 3; ++i) {
+    uint32_t k = key[i] * m;
+    k ^= k >> 24;
+    k *= m;
+    h = (h * m) ^ k;
+  }
+  h ^= h >> 13;
+  h *= m;
+  h ^= h >> 15;
+  return h;
+}
+
+// representative[v]: the first vertex with v's position (v itself when it is the first).
+// Open addressing with linear probing over a power-of-two table at most half full. Each slot keeps
+// the full 32-bit hash beside the vertex id, so a collision costs a compare in the table (already
+// in cache) instead of a random read of the other vertex's position.
+static std::vector<uint32_t> weld_representatives(const std::vector<float>& positions, uint64_t& welded) {
+  const size_t vertex_count = positions.size() / 3;
+  std::vector<uint32_t> representative(vertex_count);
+  size_t table_size = 16;
+  while (table_size < vertex_count * 2) table_size *= 2;
+  constexpr uint64_t kEmpty = ~uint64_t(0);
+  std::vector<uint64_t> table(table_size, kEmpty);  // hash << 32 | vertex id
+  const size_t mask = table_size - 1;
+  welded = 0;
+  for (size_t v = 0; v < vertex_count; ++v) {
+    const uint32_t key[3] = {position_key(positions[3 * v]), position_key(positions[3 * v + 1]),
+                             position_key(positions[3 * v + 2])};
+    const uint32_t hash = hash_position(key);
+    size_t slot = hash & mask;
+    for (;;) {
+      const uint64_t entry = table[slot];
+      if (entry == kEmpty) {
+        table[slot] = uint64_t(hash) << 32 | v;
+        representative[v] = static_cast<uint32_t>(v);
+        break;
+      }
+      const uint32_t other = static_cast<uint32_t>(entry);
+      if (uint32_t(entry >> 32) == hash && position_key(positions[3 * size_t(other)]) == key[0] &&
+          position_key(positions[3 * size_t(other) + 1]) == key[1] &&
+          position_key(positions[3 * size_t(other) + 2]) == key[2]) {
+        representative[v] = other;
+        ++welded;
+        break;
+      }
+      slot = (slot + 1) & mask;
+    }
+  }
+  return representative;
+}
+
+// Welds (optionally), drops unreferenced vertices and moves the result into a Mesh.
+static Mesh finish_mesh(RawMesh&& raw, bool weld, ReadStats& stats) {
+  const size_t vertex_count = raw.positions.size() / 3;
+  std::vector<uint32_t> new_id;  // file vertex -> output vertex (via its representative)
+  uint64_t welded = 0;
+  if (weld) {
+    new_id = weld_representatives(raw.positions, welded);
+  } else {
+    new_id.resize(vertex_count);
+    for (size_t v = 0; v < vertex_count; ++v) new_id[v] = static_cast<uint32_t>(v);
+  }
+  // Point every index at its representative and mark the representatives in use.
+  std::vector<uint8_t> used(vertex_count, 0);
+  if (welded == 0) {  // every vertex is its own representative
+    for (const uint32_t index : raw.indices) used[index] = 1;
+  } else {
+    for (uint32_t& index : raw.indices) {
+      assert(index < vertex_count);
+      index = new_id[index];
+      used[index] = 1;
+    }
+  }
+  // Output ids in file order of the representatives (first occurrence), skipping unused ones.
+  uint32_t kept = 0;
+  uint64_t unreferenced = 0;
+  std::vector<uint32_t> output_id(vertex_count, kNone);
+  for (size_t v = 0; v < vertex_count; ++v) {
+    if (new_id[v] != v) continue;  // welded into an earlier vertex
+    if (!used[v]) {
+      ++unreferenced;
+      continue;
+    }
+    output_id[v] = kept++;
+  }
+  Mesh mesh;
+  if (kept == vertex_count) {
+    mesh.positions = std::move(raw.positions);
+  } else {
+    mesh.positions.resize(size_t(kept) * 3);
+    for (size_t v = 0; v < vertex_count; ++v) {
+      const uint32_t out = output_id[v];
+      if (out == kNone) continue;
+      mesh.positions[3 * size_t(out)] = raw.positions[3 * v];
+      mesh.positions[3 * size_t(out) + 1] = raw.positions[3 * v + 1];
+      mesh.positions[3 * size_t(out) + 2] = raw.positions[3 * v + 2];
+    }
+    for (uint32_t& index : raw.indices) index = output_id[index];
+  }
+  mesh.indices = std::move(raw.indices);
+  mesh.source_polygon = std::move(raw.source_polygon);
+  stats.welded_vertices = welded;
+  stats.unreferenced_vertices = unreferenced;
+  assert(stats.welded_vertices + stats.unreferenced_vertices + kept == vertex_count);
+  return mesh;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writing files
+
+// The process umask, read without changing it (umask(2) can only be read by setting it, which
+// would race with other threads creating files).
+static mode_t current_umask() {
+  mode_t mask = 022;
+  if (FILE* status = std::fopen("/proc/self/status", "re")) {
+    char line[256];
+    while (std::fgets(line, sizeof line, status)) {
+      unsigned value;
+      if (std::sscanf(line, "Umask: %o", &value) == 1) {
+        mask = static_cast<mode_t>(value);
+        break;
+      }
+    }
+    std::fclose(status);
+  }
+  return mask;
+}
+
+OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
+  std::string pattern = path_ + ".tmp-XXXXXX";
+  fd_ = ::mkostemp(pattern.data(), O_CLOEXEC);
+  if (fd_ < 0) throw FileError(path_, "cannot create file: " + error_text(errno));
+  temp_path_ = std::move(pattern);
+  // mkstemp creates the file 0600; give the result the permissions a plain open() would.
+  if (::fchmod(fd_, static_cast<mode_t>(0666) & ~current_umask()) != 0) fail("cannot set permissions", errno);
+  buffer_.resize(size_t(1) << 20);
+}
+
+OutputFile::~OutputFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!committed_ && !temp_path_.empty()) ::unlink(temp_path_.c_str());
+}
+
+void OutputFile::fail(const std::string& what, int error_number) {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  ::unlink(temp_path_.c_str());
+  temp_path_.clear();
+  throw FileError(path_, what + ": " + error_text(error_number));
+}
+
+void OutputFile::flush() {
+  size_t done = 0;
+  while (done < used_) {
+    const ssize_t wrote = ::write(fd_, buffer_.data() + done, used_ - done);
+    if (wrote < 0 && errno == EINTR) continue;
+    if (wrote < 0) fail("cannot write", errno);
+    if (wrote == 0) fail("cannot write", ENOSPC);
+    done += static_cast<size_t>(wrote);
+  }
+  used_ = 0;
+}
+
+char* OutputFile::reserve(size_t size) {
+  assert(fd_ >= 0 && !committed_);
+  if (buffer_.size() - used_ < size) {
+    flush();
+    if (buffer_.size() < size) buffer_.resize(size);
+  }
+  return buffer_.data() + used_;
+}
+
+void OutputFile::write(const void* data, size_t size) {
+  const char* bytes = static_cast<const char*>(data);
+  while (size > 0) {
+    if (used_ == buffer_.size()) flush();
+    const size_t chunk = std::min(size, buffer_.size() - used_);
+    std::memcpy(buffer_.data() + used_, bytes, chunk);
+    used_ += chunk;
+    bytes += chunk;
+    size -= chunk;
+  }
+}
+
+void OutputFile::commit() {
+  assert(fd_ >= 0 && !committed_);
+  flush();
+  const int fd = fd_;
+  fd_ = -1;
+  if (::close(fd) != 0) fail("cannot write", errno);
+  if (::rename(temp_path_.c_str(), path_.c_str()) != 0) fail("cannot rename temporary file into place", errno);
+  committed_ = true;
+}
+
+TextWriter& TextWriter::number(float value) {
+  char* p = out_.reserve(32);
+  const std::to_chars_result result = std::to_chars(p, p + 32, value, std::chars_format::general, 9);
+  assert(result.ec == std::errc());
+  out_.advance(static_cast<size_t>(result.ptr - p));
+  return *this;
+}
+
+TextWriter& TextWriter::number(uint64_t value) {
+  char* p = out_.reserve(24);
+  const std::to_chars_result result = std::to_chars(p, p + 24, value);
+  out_.advance(static_cast<size_t>(result.ptr - p));
+  return *this;
+}
+
+TextWriter& TextWriter::number(int64_t value) {
+  char* p = out_.reserve(24);
+  const std::to_chars_result result = std::to_chars(p, p + 24, value);
+  out_.advance(static_cast<size_t>(result.ptr - p));
+  return *this;
+}
+
+}  // namespace io
+
+// ---------------------------------------------------------------------------------------------
+// Public API
+
+Mesh read_mesh(const std::string& path, const ReadOptions& options, ReadStats* stats) {
+  const std::string ext = io::lower_extension(path);
+  io::ReadResult (*reader)(const io::FileData&) = nullptr;
+  if (ext == ".obj") reader = io::read_obj;
+  if (ext == ".off") reader = io::read_off;
+  if (ext == ".ply") reader = io::read_ply;
+  if (ext == ".stl") reader = io::read_stl;
+  if (!reader) {
+    throw FileError(path, "unknown mesh format '" + ext + "' (expected .obj, .off, .ply or .stl)");
+  }
+  try {
+    io::ReadResult result;
+    {
+      const io::FileData file = io::read_file(path);
+      result = reader(file);
+    }  // the file's bytes are freed before welding allocates
+    if (result.mesh.indices.empty()) throw FileError(path, "no faces");
+    assert(result.mesh.positions.size() / 3 == result.file_vertices);
+    ReadStats local;
+    local.format = result.format;
+    local.file_vertices = result.file_vertices;
+    local.file_polygons = result.mesh.polygons;
+    local.triangulated_polygons = result.mesh.triangulated;
+    Mesh mesh = io::finish_mesh(std::move(result.mesh), options.weld, local);
+    if (stats) *stats = std::move(local);
+    return mesh;
+  } catch (const std::bad_alloc&) {
+    // Allocation is bounded by the file size, so only a file too big for this machine gets here.
+    throw FileError(path, "not enough memory to read this mesh");
+  }
+}
+
+void write_mesh(const std::string& path, const Mesh& mesh, const WriteOptions& options) {
+  const std::string ext = io::lower_extension(path);
+  if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl") {
+    throw FileError(path, "unknown mesh format '" + ext + "' (expected .obj, .off, .ply or .stl)");
+  }
+  // A mesh that would produce an unreadable file is a caller bug; refuse before creating anything.
+  if (mesh.positions.size() % 3 != 0 || mesh.indices.size() % 3 != 0) {
+    throw OptionError("write_mesh: positions and indices must come in threes");
+  }
+  const size_t vertex_count = mesh.vertex_count();
+  if (vertex_count > io::kMaxVertices || mesh.face_count() > io::kMaxTriangles) {
+    throw OptionError("write_mesh: mesh too large for 32-bit indices");
+  }
+  for (const uint32_t index : mesh.indices) {
+    if (index >= vertex_count) throw OptionError("write_mesh: vertex index out of range");
+  }
+  if (options.face_labels && options.face_labels->size() != mesh.face_count()) {
+    throw OptionError("write_mesh: " + std::to_string(options.face_labels->size()) + " face labels for " +
+                      std::to_string(mesh.face_count()) + " faces");
+  }
+  io::OutputFile out(path);
+  if (ext == ".obj") io::write_obj(out, mesh);
+  if (ext == ".off") io::write_off(out, mesh);
+  if (ext == ".ply") io::write_ply(out, mesh, options);
+  if (ext == ".stl") io::write_stl(out, mesh);
+  out.commit();
+}
+
+void write_text_file(const std::string& path, const std::string& content) {
+  io::OutputFile out(path);
+  out.write(content);
+  out.commit();
+}
+
+void cluster_color(uint32_t id, uint8_t rgb[3]) {
+  if (id == kNone) {  // unassigned faces: neutral grey
+    rgb[0] = rgb[1] = rgb[2] = 128;
+    return;
+  }
+  // Hue walks the circle by the golden ratio, so consecutive ids land far apart and any run of ids
+  // stays evenly spread; saturation and value take a few hashed levels so that ids whose hues come
+  // close again (every ~89 steps) still differ.
+  const double hue = std::fmod(double(id) * 0.6180339887498949, 1.0) * 6.0;
+  uint32_t h = id * 0x9e3779b1u;
+  h ^= h >> 16;
+  h *= 0x85ebca6bu;
+  h ^= h >> 13;
+  const double saturation = 0.55 + 0.15 * double(h & 3);    // 0.55 .. 1.0
+  const double value = 0.70 + 0.10 * double((h >> 2) % 4);  // 0.70 .. 1.0
+  const int sector = static_cast<int>(hue) % 6;
+  const double f = hue - std::floor(hue);
+  const double p = value * (1 - saturation), q = value * (1 - saturation * f), t = value * (1 - saturation * (1 - f));
+  double r = 0, g = 0, b = 0;
+  switch (sector) {
+    case 0:
+      r = value, g = t, b = p;
+      break;
+    case 1:
+      r = q, g = value, b = p;
+      break;
+    case 2:
+      r = p, g = value, b = t;
+      break;
+    case 3:
+      r = p, g = q, b = value;
+      break;
+    case 4:
+      r = t, g = p, b = value;
+      break;
+    default:
+      r = value, g = p, b = q;
+      break;
+  }
+  rgb[0] = static_cast<uint8_t>(std::lround(r * 255));
+  rgb[1] = static_cast<uint8_t>(std::lround(g * 255));
+  rgb[2] = static_cast<uint8_t>(std::lround(b * 255));
+}
+
+}  // namespace meshcvt
