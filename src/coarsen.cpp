@@ -1,0 +1,733 @@
+// meshcvt: uniform coarsening, the dual mesh of a face clustering (Fan et al. Section 6.1, second
+// step; API in meshcvt/coarsen.h, vertex placement in vertex_placement.cpp).
+//
+// "Two vertices are connected with an edge in the coarsened mesh if the corresponding clusters are
+// adjacent. A vertex point shared by three clusters corresponds to a triangle; shared by n >= 4
+// clusters, to an n-sided polygon, triangulated into n - 2 triangles." Here:
+//
+//  * Each mesh vertex's face fan is walked in orientation order (across the edge (v, b) of the face
+//    (v, a, b)), giving its clusters as a cyclic sequence of runs. Three or more runs make a
+//    polygon whose order is the fan's, so the output keeps the input's orientation.
+//  * On the boundary the fan is open: two or more runs give the polygon closed by the boundary
+//    (the corner is not cut off), and its closing edge from the last run to the first is exactly
+//    the step the input's boundary loop takes there. So each pair of clusters consecutive along an
+//    input boundary loop gets one output boundary edge, and loops stay loops.
+//  * n-gons (n >= 4) get the triangulation maximizing the minimum angle (interval dynamic
+//    programming, O(n^3)), first avoiding diagonals that are already edges of the dual (they would
+//    give an edge three triangles).
+//
+// Nothing here needs maps per vertex: one pass over faces in face order (cluster face and border
+// counts, and per vertex the one cluster of its faces, if one), one over vertices where only those
+// on a cluster border or the mesh boundary (about a tenth) walk their fan through the CSR
+// vertex->faces arrays, and a flood fill for cluster connectivity, which runs beside the first two
+// on a second thread together with the mass centroids. The few records per corner vertex are
+// sorted afterwards.
+//
+// Defects (see DualDefect) are found from counts a disk cluster must have: it is edge-connected and
+// V - E + F = 1 where E = (3F + B) / 2 with B its border half-edges (a connected surface with
+// boundary and chi = 1 is a disk). A cluster seen in two separate runs around a vertex (pinched) is
+// reported too; with the two counts above that only adds cases at non-manifold vertices. Two clusters whose border has more than two chain ends share two borders. The
+// output is checked for duplicate triangles, edges of three or more triangles, orientation
+// disagreements, input boundary steps without an output edge and degenerate triangles.
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <numbers>
+#include <exception>
+#include <string>
+#include <thread>
+#include <unordered_set>
+#include <vector>
+
+#include "meshcvt/coarsen.h"
+#include "meshcvt/error.h"
+
+namespace meshcvt {
+
+namespace detail {
+// In vertex_placement.cpp: validates labels and weights (OptionError), and places the vertices given
+// each vertex's cluster (vertex_cluster[v], when below `clusters`: all faces of v are in that
+// cluster; other values: several clusters or none).
+void check_placement_inputs(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
+                            const std::vector<float>* face_weights);
+// Mass centroids in double, 3 per cluster.
+std::vector<double> mass_centroids(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
+                                   const std::vector<float>* face_weights);
+std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
+                                          VertexPlacement placement, const std::vector<float>* face_weights,
+                                          const std::vector<uint32_t>& vertex_cluster,
+                                          const std::vector<double>& centroids, unsigned threads);
+}  // namespace detail
+
+namespace {
+
+using detail::check_placement_inputs;
+
+// Polygons larger than this (a vertex of enormous valence with a cluster per face) are fanned from
+// their first cluster instead of paying O(n^3).
+constexpr uint32_t kMaxDynamicProgramming = 128;
+// A triangle whose smallest angle has a sine below this is reported as degenerate.
+constexpr double kDegenerateSine = 1e-9;
+
+// Vertex state: the cluster of all the vertex's (non-collapsed) faces, kSeveral, or kUnset (no face).
+// A vertex inside one cluster needs no fan walk, on the mesh boundary or not: its fans are single
+// runs, which count the vertex once for that cluster and give no polygon.
+constexpr uint32_t kSeveral = 0x7fffffffu;
+constexpr uint32_t kUnset = 0x7ffffffeu;
+constexpr uint32_t kMaxClusters = kUnset;
+
+uint64_t undirected_key(uint32_t a, uint32_t b) {
+  if (a > b) std::swap(a, b);
+  return (uint64_t(a) << 32) | b;
+}
+uint64_t directed_key(uint32_t from, uint32_t to) { return (uint64_t(from) << 32) | to; }
+uint32_t key_high(uint64_t k) { return uint32_t(k >> 32); }
+uint32_t key_low(uint64_t k) { return uint32_t(k); }
+
+void check_topology(const Mesh& mesh, const Topology& topology, uint32_t clusters) {
+  if (clusters >= kMaxClusters) throw OptionError("coarsen: too many clusters (" + std::to_string(clusters) + ")");
+  if (topology.face_adjacent.size() != mesh.indices.size() ||
+      topology.vertex_face_offsets.size() != mesh.vertex_count() + 1 ||
+      topology.vertex_faces.size() != topology.vertex_face_offsets.back())
+    throw OptionError("coarsen: the topology was not built for this mesh");
+}
+
+// Everything the topology pass learns: the polygons of corner vertices, the ends of the border
+// chains between clusters, the steps the boundary loops take between clusters, per-cluster counts.
+struct DualStructure {
+  std::vector<uint32_t> polygon_offsets{0};
+  std::vector<uint32_t> polygon_clusters;
+  std::vector<uint64_t> chain_ends;      // undirected_key per end of a border chain (two per chain)
+  std::vector<uint64_t> boundary_steps;  // directed_key(from, to) where a boundary loop changes cluster
+  // per cluster
+  std::vector<uint32_t> all_faces;       // every face, collapsed ones included (0: empty cluster)
+  std::vector<uint32_t> faces;           // non-collapsed faces, F
+  std::vector<uint64_t> border_half_edges;  // B: edges of its faces with no neighbour in the cluster
+  std::vector<uint32_t> vertices;        // V: distinct vertices of its non-collapsed faces
+  std::vector<uint32_t> boundary_ends;   // ends of its arcs along the mesh boundary (2 per arc)
+  std::vector<uint32_t> components;      // edge-connected pieces
+  std::vector<uint8_t> pinched;          // seen in two runs around some vertex
+  std::vector<uint8_t> collapsed;        // per face, only filled when any face is collapsed
+  bool any_collapsed = false;
+  std::vector<uint32_t> vertex_state;    // per vertex: its faces' cluster, kSeveral or kUnset
+};
+
+bool is_collapsed(const uint32_t* t) { return t[0] == t[1] || t[1] == t[2] || t[0] == t[2]; }
+
+// One pass over faces, in face order (sequential reads but for the neighbour's label): F, B, the
+// collapsed flags, and the vertex state: which cluster a vertex's faces are in (kSeveral when more
+// than one).
+void count_faces(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                 DualStructure& dual) {
+  size_t faces = mesh.face_count();
+  dual.vertex_state.assign(mesh.vertex_count(), kUnset);
+  uint32_t* state = dual.vertex_state.data();
+  for (size_t f = 0; f < faces; ++f) {
+    uint32_t label = labels[f];
+    ++dual.all_faces[label];
+    const uint32_t* t = &mesh.indices[3 * f];
+    if (is_collapsed(t)) {
+      if (!dual.any_collapsed) dual.collapsed.assign(faces, 0);
+      dual.any_collapsed = true;
+      dual.collapsed[f] = 1;
+      continue;
+    }
+    ++dual.faces[label];
+    for (int e = 0; e < 3; ++e) {
+      uint32_t across = topology.face_adjacent[3 * f + e];
+      if (across != kNone && across >= faces) throw OptionError("coarsen: the topology was not built for this mesh");
+      dual.border_half_edges[label] += across == kNone || labels[across] != label;
+    }
+    for (int c = 0; c < 3; ++c) {
+      uint32_t& vertex = state[t[c]];
+      if (vertex != label) vertex = vertex == kUnset ? label : kSeveral;
+    }
+  }
+}
+
+// Components of each cluster: flood fill across manifold edges between faces of the same cluster.
+// Reads only the inputs and writes only `components`, so it runs beside the other passes.
+void count_components(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                      std::vector<uint32_t>& components) {
+  size_t faces = mesh.face_count();
+  std::vector<uint8_t> seen(faces, 0);
+  std::vector<uint32_t> stack;
+  for (size_t f = 0; f < faces; ++f) {
+    // Collapsed faces have no neighbours and belong to no fan; they are not pieces of a cluster.
+    if (seen[f] || is_collapsed(&mesh.indices[3 * f])) continue;
+    uint32_t label = labels[f];
+    ++components[label];
+    seen[f] = 1;
+    stack.push_back(uint32_t(f));
+    while (!stack.empty()) {
+      uint32_t g = stack.back();
+      stack.pop_back();
+      for (int e = 0; e < 3; ++e) {
+        uint32_t h = topology.face_adjacent[3 * size_t(g) + e];
+        if (h < faces && !seen[h] && labels[h] == label) {  // kNone, or out of range (checked elsewhere)
+          seen[h] = 1;
+          stack.push_back(h);
+        }
+      }
+    }
+  }
+}
+
+// Walks the fans of one vertex whose faces lie in two or more clusters and records what they give.
+class FanWalker {
+ public:
+  FanWalker(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels, DualStructure& dual)
+      : mesh_(mesh), topology_(topology), labels_(labels), dual_(dual), cluster_seen_at_(dual.faces.size(), kNone) {}
+
+  void vertex(uint32_t v) {
+    v_ = v;
+    uint32_t begin = topology_.vertex_face_offsets[v], end = topology_.vertex_face_offsets[v + 1];
+    if (begin > end || end > topology_.vertex_faces.size())
+      throw OptionError("coarsen: the topology was not built for this mesh");
+    span_begin_ = topology_.vertex_faces.data() + begin;
+    degree_ = end - begin;
+    visited_.assign(degree_, 0);
+    for (uint32_t s = 0; s < degree_; ++s) {
+      if (visited_[s]) continue;
+      uint32_t f = span_begin_[s];
+      if (f >= labels_.size() || corner_of(tri(f), v_) == 3)
+        throw OptionError("coarsen: the topology was not built for this mesh");
+      if (dual_.any_collapsed && dual_.collapsed[f]) continue;  // part of no fan
+      walk(f);
+      runs_from_fan();
+      emit();
+    }
+  }
+
+ private:
+  const uint32_t* tri(uint32_t f) const { return &mesh_.indices[3 * size_t(f)]; }
+  static int corner_of(const uint32_t* t, uint32_t v) { return t[0] == v ? 0 : t[1] == v ? 1 : t[2] == v ? 2 : 3; }
+
+  // The face across the edge {v, x} of face g, or kNone.
+  uint32_t across(uint32_t g, uint32_t x) const {
+    const uint32_t* t = tri(g);
+    int cv = corner_of(t, v_), cx = corner_of(t, x);
+    if (cv == 3 || cx == 3 || cv == cx) return kNone;
+    int edge = (cv + 1) % 3 == cx ? cv : cx;  // edge e joins corners e and e+1
+    uint32_t h = topology_.face_adjacent[3 * size_t(g) + edge];
+    if (h == kNone) return kNone;
+    const uint32_t* th = tri(h);
+    if (corner_of(th, v_) == 3 || corner_of(th, x) == 3) return kNone;  // not this vertex's fan
+    return h;
+  }
+  // The corner of face g that is neither v nor x (g is not collapsed, so it is well defined).
+  uint32_t third(uint32_t g, uint32_t x) const {
+    const uint32_t* t = tri(g);
+    return t[0] != v_ && t[0] != x ? t[0] : t[1] != v_ && t[1] != x ? t[1] : t[2];
+  }
+  // Position of face g in the vertex's sorted face list, degree_ when absent.
+  uint32_t slot(uint32_t g) const {
+    if (degree_ <= 16) {  // the usual fan: a short scan beats the binary search
+      for (uint32_t s = 0; s < degree_; ++s)
+        if (span_begin_[s] == g) return s;
+      return degree_;
+    }
+    const uint32_t* end = span_begin_ + degree_;
+    const uint32_t* it = std::lower_bound(span_begin_, end, g);
+    return it != end && *it == g ? uint32_t(it - span_begin_) : degree_;
+  }
+  // Marks g visited; false when g is not a face of this vertex or was visited already (only
+  // possible around non-manifold configurations, where the walk then stops).
+  bool visit(uint32_t g) {
+    uint32_t s = slot(g);
+    if (s == degree_ || visited_[s]) return false;
+    visited_[s] = 1;
+    return true;
+  }
+
+  // Collects the fan of f in forward order (counter-clockwise seen from the side the face (v, a, b)
+  // faces, i.e. from face (v, a, b) across its edge (v, b)), starting at the first face of an open
+  // fan. Sets closed_. Forward first: a closed fan (the usual case) is walked once.
+  void walk(uint32_t f) {
+    const uint32_t* t = tri(f);
+    int cv = corner_of(t, v_);
+    fan_.clear();
+    closed_ = false;
+    visit(f);
+    fan_.push_back(f);
+    uint32_t g = f, exit = t[(cv + 2) % 3];
+    for (uint32_t steps = 0; steps < degree_; ++steps) {
+      uint32_t h = across(g, exit);
+      if (h == f) {
+        closed_ = true;
+        return;
+      }
+      if (h == kNone || !visit(h)) break;
+      fan_.push_back(h);
+      exit = third(h, exit);
+      g = h;
+    }
+    // Open: walk backward from f (across its other edge at v) and put those faces in front.
+    back_.clear();
+    g = f;
+    exit = t[(cv + 1) % 3];
+    for (uint32_t steps = 0; steps < degree_; ++steps) {
+      uint32_t h = across(g, exit);
+      if (h == kNone || !visit(h)) break;
+      back_.push_back(h);
+      exit = third(h, exit);
+      g = h;
+    }
+    if (!back_.empty()) {
+      fan_.insert(fan_.begin(), back_.rbegin(), back_.rend());
+    }
+  }
+
+  void runs_from_fan() {
+    runs_.clear();
+    for (uint32_t g : fan_)
+      if (runs_.empty() || runs_.back() != labels_[g]) runs_.push_back(labels_[g]);
+    if (closed_ && runs_.size() > 1 && runs_.front() == runs_.back()) runs_.pop_back();
+  }
+
+  void emit() {
+    size_t n = runs_.size();
+    for (uint32_t c : runs_) {
+      if (cluster_seen_at_[c] == v_) {
+        dual_.pinched[c] = 1;  // the cluster's faces around v are not one wedge
+      } else {
+        cluster_seen_at_[c] = v_;
+        ++dual_.vertices[c];
+      }
+    }
+    if (closed_) {
+      if (n < 3) return;  // inside a cluster, or in the middle of a border chain
+      for (size_t i = 0; i < n; ++i) dual_.chain_ends.push_back(undirected_key(runs_[i], runs_[(i + 1) % n]));
+    } else {
+      for (size_t i = 0; i + 1 < n; ++i) dual_.chain_ends.push_back(undirected_key(runs_[i], runs_[i + 1]));
+      if (n >= 2 && runs_.front() != runs_.back()) {
+        // The boundary enters v along the last face's edge and leaves along the first face's.
+        dual_.boundary_steps.push_back(directed_key(runs_.back(), runs_.front()));
+        ++dual_.boundary_ends[runs_.back()];
+        ++dual_.boundary_ends[runs_.front()];
+      }
+      if (n < 3) return;
+    }
+    dual_.polygon_clusters.insert(dual_.polygon_clusters.end(), runs_.begin(), runs_.end());
+    dual_.polygon_offsets.push_back(uint32_t(dual_.polygon_clusters.size()));
+  }
+
+  const Mesh& mesh_;
+  const Topology& topology_;
+  const std::vector<uint32_t>& labels_;
+  DualStructure& dual_;
+  std::vector<uint32_t> cluster_seen_at_;  // per cluster: the last vertex that counted it
+  uint32_t v_ = 0, degree_ = 0;
+  const uint32_t* span_begin_ = nullptr;
+  std::vector<uint8_t> visited_;
+  std::vector<uint32_t> fan_, back_, runs_;
+  bool closed_ = false;
+};
+
+// Vertices inside one cluster only count for its V; the others (on a cluster border, about a
+// tenth) walk their fans. Vertex order: in most files it follows face order closely enough that the
+// walks' reads of faces, neighbours and labels stay in cache.
+void walk_vertices(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                   DualStructure& dual) {
+  FanWalker walker(mesh, topology, labels, dual);
+  size_t vertices = mesh.vertex_count();
+  for (size_t v = 0; v < vertices; ++v) {
+    uint32_t state = dual.vertex_state[v];
+    if (state == kUnset) continue;  // unreferenced, or in collapsed faces only
+    if (state != kSeveral)
+      ++dual.vertices[state];
+    else
+      walker.vertex(uint32_t(v));
+  }
+}
+
+void init_dual(DualStructure& dual, uint32_t clusters) {
+  dual.all_faces.assign(clusters, 0);
+  dual.faces.assign(clusters, 0);
+  dual.border_half_edges.assign(clusters, 0);
+  dual.vertices.assign(clusters, 0);
+  dual.boundary_ends.assign(clusters, 0);
+  dual.components.assign(clusters, 0);
+  dual.pinched.assign(clusters, 0);
+}
+
+void cluster_defects(const DualStructure& dual, std::vector<DualDefect>& defects) {
+  uint32_t clusters = uint32_t(dual.faces.size());
+  for (uint32_t i = 0; i < clusters; ++i) {
+    if (dual.all_faces[i] == 0) {
+      defects.push_back({DualDefect::empty_cluster, i, kNone, kNone});
+      continue;
+    }
+    // 2 chi = 2V - 2E + 2F with 2E = 3F + B.
+    int64_t twice_chi = 2 * int64_t(dual.vertices[i]) - int64_t(dual.faces[i]) - int64_t(dual.border_half_edges[i]);
+    if (dual.faces[i] == 0 || dual.components[i] != 1 || dual.pinched[i] || twice_chi != 2)
+      defects.push_back({DualDefect::cluster_not_disk, i, kNone, kNone});
+    if (dual.boundary_ends[i] > 2) defects.push_back({DualDefect::boundary_arcs, i, kNone, kNone});
+  }
+  // A border chain has two ends; more than two ends between the same pair means separate borders.
+  std::vector<uint64_t> ends = dual.chain_ends;
+  std::sort(ends.begin(), ends.end());
+  for (size_t i = 0; i < ends.size();) {
+    size_t j = i;
+    while (j < ends.size() && ends[j] == ends[i]) ++j;
+    if (j - i > 2) defects.push_back({DualDefect::double_border, key_high(ends[i]), key_low(ends[i]), kNone});
+    i = j;
+  }
+}
+
+// ---- n-gon triangulation
+
+double smallest_angle(const float* a, const float* b, const float* c) {
+  const float* p[3] = {a, b, c};
+  double smallest = std::numbers::pi;
+  for (int k = 0; k < 3; ++k) {
+    const float* o = p[k];
+    const float* x = p[(k + 1) % 3];
+    const float* y = p[(k + 2) % 3];
+    double u[3] = {double(x[0]) - o[0], double(x[1]) - o[1], double(x[2]) - o[2]};
+    double w[3] = {double(y[0]) - o[0], double(y[1]) - o[1], double(y[2]) - o[2]};
+    double cross[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+    double sine = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+    double cosine = u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
+    smallest = std::min(smallest, std::atan2(sine, cosine));  // atan2(0, 0) = 0: coincident points
+  }
+  return smallest;
+}
+
+class PolygonTriangulator {
+ public:
+  PolygonTriangulator(const std::vector<float>& positions, std::vector<uint64_t> dual_edges)
+      : positions_(positions), dual_edges_(std::move(dual_edges)) {
+    std::sort(dual_edges_.begin(), dual_edges_.end());
+    dual_edges_.erase(std::unique(dual_edges_.begin(), dual_edges_.end()), dual_edges_.end());
+  }
+
+  uint64_t polygons_triangulated = 0;
+
+  // Triangulates the polygon q[0..n) (clusters in fan order) into `triangles`. A cluster repeated in
+  // the polygon (a pinched cluster) splits it into simple polygons at the repeats first.
+  void polygon(const uint32_t* q, size_t n, std::vector<uint32_t>& triangles) {
+    stack_.clear();
+    for (size_t i = 0; i < n; ++i) {
+      auto it = std::find(stack_.begin(), stack_.end(), q[i]);
+      if (it == stack_.end()) {
+        stack_.push_back(q[i]);
+        continue;
+      }
+      // q[i] closes the loop it..end: that part is a polygon of its own.
+      simple_.assign(it, stack_.end());
+      simple_polygon(triangles);
+      stack_.erase(it + 1, stack_.end());
+    }
+    simple_ = stack_;
+    simple_polygon(triangles);
+  }
+
+ private:
+  struct Score {
+    uint32_t bad = 0;   // diagonals that are already edges of the dual
+    double angle = 0;   // smallest angle of the triangles
+  };
+  static bool better(const Score& a, const Score& b) {
+    return a.bad < b.bad || (a.bad == b.bad && a.angle > b.angle);
+  }
+  const float* at(uint32_t cluster) const { return &positions_[3 * size_t(cluster)]; }
+  bool existing_edge(uint32_t a, uint32_t b) const {
+    uint64_t key = undirected_key(a, b);
+    return std::binary_search(dual_edges_.begin(), dual_edges_.end(), key) || diagonals_.count(key) != 0;
+  }
+
+  void simple_polygon(std::vector<uint32_t>& triangles) {
+    const std::vector<uint32_t>& q = simple_;
+    uint32_t n = uint32_t(q.size());
+    if (n < 3) return;  // two clusters: an edge, no triangle
+    if (n == 3) {
+      triangles.insert(triangles.end(), {q[0], q[1], q[2]});
+      return;
+    }
+    ++polygons_triangulated;
+    if (n > kMaxDynamicProgramming) {
+      for (uint32_t k = 1; k + 1 < n; ++k) {
+        triangles.insert(triangles.end(), {q[0], q[k], q[k + 1]});
+        if (k >= 2) diagonals_.insert(undirected_key(q[0], q[k]));
+      }
+      return;
+    }
+    // best[i][j]: the best triangulation of the sub-polygon q[i..j] closed by the edge (i, j);
+    // every triangulation of q contains the polygon edge (0, n-1), so best[0][n-1] is the answer.
+    best_.assign(size_t(n) * n, Score{});
+    split_.assign(size_t(n) * n, 0);
+    for (uint32_t length = 2; length < n; ++length) {
+      for (uint32_t i = 0; i + length < n; ++i) {
+        uint32_t j = i + length;
+        Score chosen{~0u, -1.0};
+        uint32_t chosen_k = i + 1;
+        for (uint32_t k = i + 1; k < j; ++k) {
+          Score s{0, smallest_angle(at(q[i]), at(q[k]), at(q[j]))};
+          if (k - i >= 2) {  // (i, k) is a diagonal
+            const Score& left = best_[size_t(i) * n + k];
+            s.bad += left.bad + existing_edge(q[i], q[k]);
+            s.angle = std::min(s.angle, left.angle);
+          }
+          if (j - k >= 2) {
+            const Score& right = best_[size_t(k) * n + j];
+            s.bad += right.bad + existing_edge(q[k], q[j]);
+            s.angle = std::min(s.angle, right.angle);
+          }
+          if (better(s, chosen)) {
+            chosen = s;
+            chosen_k = k;
+          }
+        }
+        best_[size_t(i) * n + j] = chosen;
+        split_[size_t(i) * n + j] = chosen_k;
+      }
+    }
+    pending_.assign(1, {0, n - 1});
+    while (!pending_.empty()) {
+      auto [i, j] = pending_.back();
+      pending_.pop_back();
+      uint32_t k = split_[size_t(i) * n + j];
+      triangles.insert(triangles.end(), {q[i], q[k], q[j]});
+      if (k - i >= 2) {
+        diagonals_.insert(undirected_key(q[i], q[k]));
+        pending_.push_back({i, k});
+      }
+      if (j - k >= 2) {
+        diagonals_.insert(undirected_key(q[k], q[j]));
+        pending_.push_back({k, j});
+      }
+    }
+  }
+
+  const std::vector<float>& positions_;
+  std::vector<uint64_t> dual_edges_;         // sorted: pairs of clusters with a border chain or boundary step
+  std::unordered_set<uint64_t> diagonals_;   // diagonals chosen so far
+  std::vector<uint32_t> stack_, simple_;
+  std::vector<Score> best_;
+  std::vector<uint32_t> split_;
+  std::vector<std::pair<uint32_t, uint32_t>> pending_;
+};
+
+// ---- checks on the output triangles
+
+// Drops same-orientation copies of a triangle (keeping the first), reports opposite-orientation
+// copies. Returns the number dropped.
+uint64_t merge_duplicates(std::vector<uint32_t>& triangles, std::vector<DualDefect>& defects) {
+  struct Entry {
+    uint32_t a, b, c, index;
+  };
+  size_t count = triangles.size() / 3;
+  std::vector<Entry> entries(count);
+  for (size_t t = 0; t < count; ++t) {
+    uint32_t a = triangles[3 * t], b = triangles[3 * t + 1], c = triangles[3 * t + 2];
+    // Rotate the smallest id first: keeps the orientation, makes equal triangles equal.
+    if (b < a && b < c)
+      entries[t] = {b, c, a, uint32_t(t)};
+    else if (c < a && c < b)
+      entries[t] = {c, a, b, uint32_t(t)};
+    else
+      entries[t] = {a, b, c, uint32_t(t)};
+  }
+  auto less = [](const Entry& x, const Entry& y) {
+    if (x.a != y.a) return x.a < y.a;
+    if (x.b != y.b) return x.b < y.b;
+    if (x.c != y.c) return x.c < y.c;
+    return x.index < y.index;
+  };
+  std::sort(entries.begin(), entries.end(), less);
+  std::vector<uint8_t> drop(count, 0);
+  uint64_t dropped = 0;
+  for (size_t k = 1; k < entries.size(); ++k) {
+    const Entry &p = entries[k - 1], &e = entries[k];
+    if (p.a == e.a && p.b == e.b && p.c == e.c) {
+      drop[e.index] = 1;
+      ++dropped;
+    }
+  }
+  for (const Entry& e : entries) {
+    if (e.b > e.c || drop[e.index]) continue;  // look for (a, c, b) from the (a, b, c) side only
+    Entry reversed{e.a, e.c, e.b, 0};
+    auto it = std::lower_bound(entries.begin(), entries.end(), reversed, less);
+    if (it != entries.end() && it->a == e.a && it->b == e.c && it->c == e.b)
+      defects.push_back({DualDefect::duplicate_triangle, e.a, e.b, e.c});
+  }
+  if (dropped) {
+    size_t kept = 0;
+    for (size_t t = 0; t < count; ++t) {
+      if (drop[t]) continue;
+      for (int k = 0; k < 3; ++k) triangles[3 * kept + k] = triangles[3 * t + k];
+      ++kept;
+    }
+    triangles.resize(3 * kept);
+  }
+  return dropped;
+}
+
+// Edge checks; returns the number of boundary edges (edges of one triangle).
+uint64_t check_edges(const std::vector<uint32_t>& triangles, const std::vector<uint64_t>& boundary_steps,
+                     std::vector<DualDefect>& defects) {
+  // key << 1 | direction, so the copies of an edge sort together.
+  std::vector<std::pair<uint64_t, uint8_t>> edges;
+  edges.reserve(triangles.size());
+  for (size_t t = 0; t < triangles.size(); t += 3)
+    for (int k = 0; k < 3; ++k) {
+      uint32_t from = triangles[t + k], to = triangles[t + (k + 1) % 3];
+      edges.push_back({undirected_key(from, to), uint8_t(from < to)});
+    }
+  std::sort(edges.begin(), edges.end());
+  uint64_t boundary = 0;
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+    uint32_t a = key_high(edges[i].first), b = key_low(edges[i].first);
+    if (j - i == 1) ++boundary;
+    if (j - i > 2) defects.push_back({DualDefect::nonmanifold_output, a, b, kNone});
+    if (j - i == 2 && edges[i].second == edges[i + 1].second)
+      defects.push_back({DualDefect::inconsistent_orientation, a, b, kNone});
+    i = j;
+  }
+  for (uint64_t step : boundary_steps) {
+    uint32_t from = key_high(step), to = key_low(step);
+    auto it = std::lower_bound(edges.begin(), edges.end(), std::pair<uint64_t, uint8_t>{undirected_key(from, to), 0});
+    if (it == edges.end() || it->first != undirected_key(from, to))
+      defects.push_back({DualDefect::missing_boundary_edge, from, to, kNone});
+  }
+  return boundary;
+}
+
+void check_degenerate(const std::vector<uint32_t>& triangles, const std::vector<float>& positions,
+                      std::vector<DualDefect>& defects) {
+  for (size_t t = 0; t < triangles.size(); t += 3) {
+    const float* p[3];
+    for (int k = 0; k < 3; ++k) p[k] = &positions[3 * size_t(triangles[t + k])];
+    double u[3], w[3], longest2 = 0;
+    for (int d = 0; d < 3; ++d) {
+      u[d] = double(p[1][d]) - p[0][d];
+      w[d] = double(p[2][d]) - p[0][d];
+    }
+    for (int k = 0; k < 3; ++k) {
+      double e2 = 0;
+      for (int d = 0; d < 3; ++d) {
+        double x = double(p[(k + 1) % 3][d]) - p[k][d];
+        e2 += x * x;
+      }
+      longest2 = std::max(longest2, e2);
+    }
+    double cross[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+    double twice_area = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+    // twice_area / longest^2 is at most the sine of the smallest angle (times a factor <= 2/sqrt3).
+    if (!(twice_area > kDegenerateSine * longest2))
+      defects.push_back({DualDefect::degenerate_triangle, triangles[t], triangles[t + 1], triangles[t + 2]});
+  }
+}
+
+void sort_defects(std::vector<DualDefect>& defects) {
+  auto less = [](const DualDefect& x, const DualDefect& y) {
+    if (x.kind != y.kind) return x.kind < y.kind;
+    if (x.cluster != y.cluster) return x.cluster < y.cluster;
+    if (x.other != y.other) return x.other < y.other;
+    return x.third < y.third;
+  };
+  std::sort(defects.begin(), defects.end(), less);
+  defects.erase(std::unique(defects.begin(), defects.end()), defects.end());
+}
+
+CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                  uint32_t clusters, const CoarsenOptions& options, const std::vector<float>* face_weights) {
+  check_topology(mesh, topology, clusters);
+  check_placement_inputs(mesh, labels, clusters, face_weights);
+  DualStructure dual;
+  init_dual(dual, clusters);
+  // Two independent halves of similar cost: the face and vertex passes of the dual, and the mass
+  // centroids with the connectivity flood fill. Each writes its own arrays, so the result is the
+  // same whether they run side by side or one after the other.
+  std::vector<double> centroids;
+  auto dual_half = [&] {
+    count_faces(mesh, topology, labels, dual);
+    walk_vertices(mesh, topology, labels, dual);
+  };
+  auto other_half = [&] {
+    centroids = detail::mass_centroids(mesh, labels, clusters, face_weights);
+    count_components(mesh, topology, labels, dual.components);
+  };
+  if (options.threads == 1 || mesh.face_count() < 50000) {
+    dual_half();
+    other_half();
+  } else {
+    std::exception_ptr other_error;
+    std::thread other([&] {
+      try {
+        other_half();
+      } catch (...) {
+        other_error = std::current_exception();
+      }
+    });
+    try {
+      dual_half();
+    } catch (...) {
+      other.join();
+      throw;
+    }
+    other.join();
+    if (other_error) std::rethrow_exception(other_error);
+  }
+  std::vector<float> positions = detail::place_cluster_vertices(mesh, labels, clusters, options.placement,
+                                                                face_weights, dual.vertex_state, centroids,
+                                                                options.threads);
+
+  CoarsenResult result;
+  cluster_defects(dual, result.defects);
+
+  std::vector<uint64_t> dual_edges = dual.chain_ends;
+  for (uint64_t step : dual.boundary_steps) dual_edges.push_back(undirected_key(key_high(step), key_low(step)));
+  PolygonTriangulator triangulator(positions, std::move(dual_edges));
+  std::vector<uint32_t> triangles;
+  size_t polygons = dual.polygon_offsets.size() - 1;
+  triangles.reserve(6 * polygons);
+  for (size_t p = 0; p < polygons; ++p) {
+    uint32_t begin = dual.polygon_offsets[p], end = dual.polygon_offsets[p + 1];
+    triangulator.polygon(&dual.polygon_clusters[begin], end - begin, triangles);
+  }
+  result.corner_vertices = polygons;
+  result.polygons_triangulated = triangulator.polygons_triangulated;
+  result.merged_triangles = merge_duplicates(triangles, result.defects);
+  result.boundary_edges = check_edges(triangles, dual.boundary_steps, result.defects);
+  check_degenerate(triangles, positions, result.defects);
+  sort_defects(result.defects);
+
+  result.mesh.positions = std::move(positions);
+  result.mesh.indices = std::move(triangles);
+  return result;
+}
+
+}  // namespace
+
+CoarsenResult coarsen_clustering(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                                 uint32_t clusters, const CoarsenOptions& options,
+                                 const std::vector<float>* face_weights) {
+  return run(mesh, topology, labels, clusters, options, face_weights);
+}
+
+std::vector<DualDefect> find_dual_defects(const Mesh& mesh, const Topology& topology,
+                                          const std::vector<uint32_t>& labels, uint32_t clusters,
+                                          const CoarsenOptions& options, const std::vector<float>* face_weights) {
+  return run(mesh, topology, labels, clusters, options, face_weights).defects;
+}
+
+const char* to_string(DualDefect::Kind k) {
+  switch (k) {
+    case DualDefect::cluster_not_disk: return "cluster_not_disk";
+    case DualDefect::boundary_arcs: return "boundary_arcs";
+    case DualDefect::double_border: return "double_border";
+    case DualDefect::duplicate_triangle: return "duplicate_triangle";
+    case DualDefect::nonmanifold_output: return "nonmanifold_output";
+    case DualDefect::inconsistent_orientation: return "inconsistent_orientation";
+    case DualDefect::missing_boundary_edge: return "missing_boundary_edge";
+    case DualDefect::degenerate_triangle: return "degenerate_triangle";
+    case DualDefect::empty_cluster: return "empty_cluster";
+  }
+  return "?";
+}
+
+}  // namespace meshcvt

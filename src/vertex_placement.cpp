@@ -1,0 +1,413 @@
+// meshcvt: where each cluster's vertex goes in the coarse mesh (Fan et al. Section 6.1, first step
+// of uniform coarsening; declared in meshcvt/coarsen.h).
+//
+//   closest   : the cluster's mesh vertex nearest its mass centroid, the paper's choice (after
+//               Valette & Chassery [23]): it "conforms with the spirit of CCVT on a mesh".
+//   projected : the closest point of the surface to the mass centroid (the CCVT generator, eq. 6),
+//               found with the exact TriangleBvh.
+//   qem       : the minimizer of the cluster's area-weighted plane quadric (Garland-Heckbert; the
+//               paper's second option, after [24]), solved by eigen-decomposition with small
+//               eigenvalues truncated toward the mass centroid (Lindstrom's robust solve), then
+//               clamped toward the centroid to stay near the cluster.
+//
+// Everything is one or two linear passes over faces and vertices with per-cluster accumulators in
+// double; the order of accumulation is fixed (face order), so the result is deterministic.
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <string>
+#include <unordered_set>
+#include <vector>
+
+#include "meshcvt/coarsen.h"
+#include "meshcvt/error.h"
+#include "triangle_bvh.h"
+
+namespace meshcvt {
+
+namespace {
+
+// Eigenvalues below this fraction of the largest count as "not constrained by the quadric": a
+// cluster on a gently curved or noisy surface keeps its centroid along those directions instead of
+// flying off along a nearly flat valley of the quadric.
+constexpr double kQemRelativeEigenvalueCutoff = 1e-3;
+// The qem point may leave the cluster's bounding box by this fraction of the box diagonal (a ridge
+// or corner point lies just outside the box of a cluster whose faces stop short of it).
+constexpr double kQemBoxMargin = 0.1;
+
+}  // namespace
+
+namespace detail {
+
+void check_placement_inputs(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
+                            const std::vector<float>* face_weights) {
+  size_t faces = mesh.face_count();
+  // build_topology rejects such meshes; checked again because every pass indexes with them.
+  size_t vertices = mesh.vertex_count();
+  for (uint32_t v : mesh.indices)
+    if (v >= vertices) throw OptionError("coarsen: a face has a vertex index out of range");
+  if (labels.size() != faces)
+    throw OptionError("coarsen: " + std::to_string(labels.size()) + " labels for " + std::to_string(faces) +
+                      " faces");
+  for (size_t f = 0; f < faces; ++f)
+    if (labels[f] >= clusters)
+      throw OptionError("coarsen: face " + std::to_string(f) + " has cluster " + std::to_string(labels[f]) +
+                        ", not below the cluster count " + std::to_string(clusters));
+  if (face_weights && !face_weights->empty()) {
+    if (face_weights->size() != faces)
+      throw OptionError("coarsen: " + std::to_string(face_weights->size()) + " face weights for " +
+                        std::to_string(faces) + " faces");
+    for (size_t f = 0; f < faces; ++f) {
+      float w = (*face_weights)[f];
+      if (!std::isfinite(w) || w < 0)
+        throw OptionError("coarsen: face weight " + std::to_string(f) + " is negative or not finite");
+    }
+  }
+}
+
+}  // namespace detail
+
+namespace {
+
+const float* vertex(const Mesh& mesh, uint32_t v) { return &mesh.positions[3 * size_t(v)]; }
+
+// Twice the area vector of face f, in double.
+void face_cross(const Mesh& mesh, size_t f, double n[3]) {
+  const float* a = vertex(mesh, mesh.indices[3 * f]);
+  const float* b = vertex(mesh, mesh.indices[3 * f + 1]);
+  const float* c = vertex(mesh, mesh.indices[3 * f + 2]);
+  double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
+  double w[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
+  n[0] = u[1] * w[2] - u[2] * w[1];
+  n[1] = u[2] * w[0] - u[0] * w[2];
+  n[2] = u[0] * w[1] - u[1] * w[0];
+}
+
+}  // namespace
+
+namespace detail {
+
+// Mass centroids in double: sum w_k g_k / sum w_k, or the plain mean of face centroids where the
+// weights sum to zero (degenerate faces only).
+std::vector<double> mass_centroids(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
+                                   const std::vector<float>* face_weights) {
+  bool weighted = face_weights && !face_weights->empty();
+  std::vector<double> weighted_sum(4 * size_t(clusters), 0.0);  // x, y, z, weight
+  std::vector<double> plain_sum(4 * size_t(clusters), 0.0);     // x, y, z, count
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    double n[3];
+    face_cross(mesh, f, n);
+    double w = 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (weighted) w *= (*face_weights)[f];
+    double g[3] = {0, 0, 0};
+    for (int c = 0; c < 3; ++c) {
+      const float* p = vertex(mesh, mesh.indices[3 * f + c]);
+      for (int d = 0; d < 3; ++d) g[d] += p[d];
+    }
+    double* ws = &weighted_sum[4 * size_t(labels[f])];
+    double* ps = &plain_sum[4 * size_t(labels[f])];
+    for (int d = 0; d < 3; ++d) {
+      ws[d] += w * (g[d] / 3.0);
+      ps[d] += g[d] / 3.0;
+    }
+    ws[3] += w;
+    ps[3] += 1.0;
+  }
+  std::vector<double> centroids(3 * size_t(clusters), 0.0);
+  for (size_t i = 0; i < clusters; ++i) {
+    const double* ws = &weighted_sum[4 * i];
+    const double* ps = &plain_sum[4 * i];
+    for (int d = 0; d < 3; ++d) {
+      if (ws[3] > 0)
+        centroids[3 * i + d] = ws[d] / ws[3];
+      else if (ps[3] > 0)
+        centroids[3 * i + d] = ps[d] / ps[3];
+    }
+  }
+  return centroids;
+}
+
+}  // namespace detail
+
+namespace {
+
+double distance2(const float* p, const double* q) {
+  double dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
+  return dx * dx + dy * dy + dz * dz;
+}
+
+// closest: prefer the cluster's own vertices (every incident face in the cluster), which no other
+// cluster can pick; clusters without one take the nearest corner of their faces still free.
+std::vector<float> place_closest(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
+                                 const std::vector<double>& centroids, const std::vector<uint32_t>& vertex_cluster) {
+  std::vector<uint32_t> best_vertex(clusters, kNone);
+  std::vector<double> best_d2(clusters, INFINITY);
+  size_t vertices = mesh.vertex_count();
+  for (size_t v = 0; v < vertices; ++v) {
+    uint32_t label = vertex_cluster[v];
+    if (label >= clusters) continue;  // on a cluster border, or unused
+    double d2 = distance2(vertex(mesh, uint32_t(v)), &centroids[3 * size_t(label)]);
+    if (d2 < best_d2[label]) {  // strict: ties keep the lower vertex id
+      best_d2[label] = d2;
+      best_vertex[label] = uint32_t(v);
+    }
+  }
+  bool missing = false;
+  for (uint32_t i = 0; i < clusters; ++i) missing |= best_vertex[i] == kNone;
+  if (missing) {
+    // Clusters of a few faces have no own vertex: every corner is shared with a neighbour, and two
+    // such neighbours would often pick the same one, giving the coarse mesh coincident vertices.
+    // Each takes its nearest corner that no cluster before it took (the nearest one if all are).
+    struct Candidate {
+      uint32_t cluster, vertex;
+      double d2;
+    };
+    std::vector<Candidate> candidates;
+    for (size_t f = 0; f < mesh.face_count(); ++f) {
+      uint32_t label = labels[f];
+      if (best_vertex[label] != kNone) continue;  // has an own vertex
+      for (int c = 0; c < 3; ++c) {
+        uint32_t v = mesh.indices[3 * f + c];
+        candidates.push_back({label, v, distance2(vertex(mesh, v), &centroids[3 * size_t(label)])});
+      }
+    }
+    std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+      if (a.cluster != b.cluster) return a.cluster < b.cluster;
+      if (a.d2 != b.d2) return a.d2 < b.d2;
+      return a.vertex < b.vertex;
+    });
+    std::unordered_set<uint32_t> taken;
+    for (size_t k = 0; k < candidates.size();) {
+      size_t end = k;
+      while (end < candidates.size() && candidates[end].cluster == candidates[k].cluster) ++end;
+      uint32_t chosen = candidates[k].vertex;
+      for (size_t m = k; m < end; ++m)
+        if (!taken.count(candidates[m].vertex)) {
+          chosen = candidates[m].vertex;
+          break;
+        }
+      best_vertex[candidates[k].cluster] = chosen;
+      taken.insert(chosen);
+      k = end;
+    }
+  }
+  std::vector<float> positions(3 * size_t(clusters), 0.0f);
+  for (uint32_t i = 0; i < clusters; ++i)
+    if (best_vertex[i] != kNone)
+      for (int d = 0; d < 3; ++d) positions[3 * size_t(i) + d] = vertex(mesh, best_vertex[i])[d];
+  return positions;
+}
+
+std::vector<float> place_projected(const Mesh& mesh, uint32_t clusters, const std::vector<double>& centroids,
+                                   const std::vector<uint32_t>& labels, unsigned threads) {
+  std::vector<uint8_t> used(clusters, 0);
+  for (uint32_t label : labels) used[label] = 1;
+  TriangleBvh bvh(mesh, threads);
+  std::vector<TriangleBvh::Hit> hits(clusters);
+  bvh.closest_points(centroids.data(), clusters, hits.data(), threads);
+  std::vector<float> positions(3 * size_t(clusters), 0.0f);
+  for (uint32_t i = 0; i < clusters; ++i)
+    if (used[i] && hits[i].face != kNone)
+      for (int d = 0; d < 3; ++d) positions[3 * size_t(i) + d] = hits[i].point[d];
+  return positions;
+}
+
+// Eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi rotations (converges
+// quadratically; a handful of sweeps reach double precision). Column k of `vectors` belongs to
+// values[k].
+void symmetric_eigen3(const double m[3][3], double values[3], double vectors[3][3]) {
+  double a[3][3], v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) a[i][j] = m[i][j];
+  for (int sweep = 0; sweep < 50; ++sweep) {
+    double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    double diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+    if (off <= 1e-30 * diag || off == 0) break;
+    for (int p = 0; p < 2; ++p) {
+      for (int q = p + 1; q < 3; ++q) {
+        if (a[p][q] == 0) continue;
+        double theta = (a[q][q] - a[p][p]) / (2 * a[p][q]);
+        double t = (theta >= 0 ? 1.0 : -1.0) / (std::fabs(theta) + std::sqrt(theta * theta + 1));
+        double c = 1 / std::sqrt(t * t + 1), s = t * c;
+        // A' = J^T A J with J the rotation in the (p, q) plane; V' = V J.
+        for (int k = 0; k < 3; ++k) {
+          double akp = a[k][p], akq = a[k][q];
+          a[k][p] = c * akp - s * akq;
+          a[k][q] = s * akp + c * akq;
+        }
+        for (int k = 0; k < 3; ++k) {
+          double apk = a[p][k], aqk = a[q][k];
+          a[p][k] = c * apk - s * aqk;
+          a[q][k] = s * apk + c * aqk;
+        }
+        for (int k = 0; k < 3; ++k) {
+          double vkp = v[k][p], vkq = v[k][q];
+          v[k][p] = c * vkp - s * vkq;
+          v[k][q] = s * vkp + c * vkq;
+        }
+      }
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    values[k] = a[k][k];
+    for (int i = 0; i < 3; ++i) vectors[i][k] = v[i][k];
+  }
+}
+
+std::vector<float> place_qem(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
+                             const std::vector<double>& centroids, const std::vector<float>* face_weights) {
+  bool weighted = face_weights && !face_weights->empty();
+  // Coordinates relative to one mesh vertex keep the plane offsets d small where the mesh sits far
+  // from the origin.
+  double origin[3] = {0, 0, 0};
+  if (mesh.vertex_count() > 0)
+    for (int d = 0; d < 3; ++d) origin[d] = mesh.positions[d];
+  // Per cluster: A = sum w n n^T (xx xy xz yy yz zz), b = sum w d n, and the bounding box.
+  std::vector<double> quadric(9 * size_t(clusters), 0.0);
+  std::vector<double> box(6 * size_t(clusters));
+  for (uint32_t i = 0; i < clusters; ++i)
+    for (int d = 0; d < 3; ++d) {
+      box[6 * size_t(i) + d] = INFINITY;
+      box[6 * size_t(i) + 3 + d] = -INFINITY;
+    }
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    uint32_t label = labels[f];
+    double* bb = &box[6 * size_t(label)];
+    for (int c = 0; c < 3; ++c) {
+      const float* p = vertex(mesh, mesh.indices[3 * f + c]);
+      for (int d = 0; d < 3; ++d) {
+        bb[d] = std::min(bb[d], p[d] - origin[d]);
+        bb[3 + d] = std::max(bb[3 + d], p[d] - origin[d]);
+      }
+    }
+    double n[3];
+    face_cross(mesh, f, n);
+    double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 0)) continue;  // a degenerate face has no plane
+    double w = 0.5 * len;      // area
+    if (weighted) w *= (*face_weights)[f];
+    for (double& x : n) x /= len;
+    const float* a = vertex(mesh, mesh.indices[3 * f]);
+    double dist = n[0] * (a[0] - origin[0]) + n[1] * (a[1] - origin[1]) + n[2] * (a[2] - origin[2]);
+    double* q = &quadric[9 * size_t(label)];
+    q[0] += w * n[0] * n[0];
+    q[1] += w * n[0] * n[1];
+    q[2] += w * n[0] * n[2];
+    q[3] += w * n[1] * n[1];
+    q[4] += w * n[1] * n[2];
+    q[5] += w * n[2] * n[2];
+    q[6] += w * dist * n[0];
+    q[7] += w * dist * n[1];
+    q[8] += w * dist * n[2];
+  }
+  std::vector<float> positions(3 * size_t(clusters), 0.0f);
+  for (uint32_t i = 0; i < clusters; ++i) {
+    const double* q = &quadric[9 * size_t(i)];
+    const double* bb = &box[6 * size_t(i)];
+    if (!(bb[0] <= bb[3])) continue;  // empty cluster
+    double c[3];
+    for (int d = 0; d < 3; ++d) c[d] = centroids[3 * size_t(i) + d] - origin[d];
+    double m[3][3] = {{q[0], q[1], q[2]}, {q[1], q[3], q[4]}, {q[2], q[4], q[5]}};
+    // Minimize x^T A x - 2 b^T x: x = c + sum over kept eigenpairs of (u . (b - A c)) / lambda u.
+    double r[3];
+    for (int d = 0; d < 3; ++d) r[d] = q[6 + d] - (m[d][0] * c[0] + m[d][1] * c[1] + m[d][2] * c[2]);
+    double values[3], vectors[3][3];
+    symmetric_eigen3(m, values, vectors);
+    double largest = std::max({values[0], values[1], values[2]});
+    double x[3] = {c[0], c[1], c[2]};
+    if (largest > 0) {
+      for (int k = 0; k < 3; ++k) {
+        if (!(values[k] > kQemRelativeEigenvalueCutoff * largest)) continue;
+        double along = (vectors[0][k] * r[0] + vectors[1][k] * r[1] + vectors[2][k] * r[2]) / values[k];
+        for (int d = 0; d < 3; ++d) x[d] += along * vectors[d][k];
+      }
+    }
+    // Clamp: the largest t in [0, 1] keeping c + t (x - c) inside the grown box. c itself is inside
+    // (a convex combination of points of the cluster; the box is widened to it against rounding).
+    double diagonal = std::sqrt((bb[3] - bb[0]) * (bb[3] - bb[0]) + (bb[4] - bb[1]) * (bb[4] - bb[1]) +
+                                (bb[5] - bb[2]) * (bb[5] - bb[2]));
+    double margin = kQemBoxMargin * diagonal;
+    double t = 1.0;
+    for (int d = 0; d < 3; ++d) {
+      double lo = std::min(bb[d], c[d]) - margin, hi = std::max(bb[3 + d], c[d]) + margin;
+      double step = x[d] - c[d];
+      if (!std::isfinite(step)) {
+        t = 0;
+        continue;
+      }
+      if (c[d] + step > hi) t = std::min(t, (hi - c[d]) / step);
+      if (c[d] + step < lo) t = std::min(t, (lo - c[d]) / step);
+    }
+    t = std::max(t, 0.0);
+    for (int d = 0; d < 3; ++d) positions[3 * size_t(i) + d] = float(c[d] + t * (x[d] - c[d]) + origin[d]);
+  }
+  return positions;
+}
+
+}  // namespace
+
+namespace detail {
+
+std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
+                                          VertexPlacement placement, const std::vector<float>* face_weights,
+                                          const std::vector<uint32_t>& vertex_cluster,
+                                          const std::vector<double>& centroids, unsigned threads) {
+  switch (placement) {
+    case VertexPlacement::closest:
+      return place_closest(mesh, labels, clusters, centroids, vertex_cluster);
+    case VertexPlacement::projected:
+      return place_projected(mesh, clusters, centroids, labels, threads);
+    case VertexPlacement::qem:
+      return place_qem(mesh, labels, clusters, centroids, face_weights);
+  }
+  throw OptionError("coarsen: unknown vertex placement");
+}
+
+}  // namespace detail
+
+std::vector<float> cluster_mass_centroids(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
+                                          const std::vector<float>* face_weights) {
+  detail::check_placement_inputs(mesh, labels, clusters, face_weights);
+  std::vector<double> centroids = detail::mass_centroids(mesh, labels, clusters, face_weights);
+  return std::vector<float>(centroids.begin(), centroids.end());
+}
+
+std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
+                                          VertexPlacement placement, const std::vector<float>* face_weights) {
+  detail::check_placement_inputs(mesh, labels, clusters, face_weights);
+  if (clusters > 0x7ffffffdu) throw OptionError("coarsen: too many clusters (" + std::to_string(clusters) + ")");
+  // Each vertex's cluster when all its faces share one (kSeveral otherwise), for `closest`.
+  constexpr uint32_t kSeveral = 0x7fffffffu, kUnset = 0x7ffffffeu;
+  std::vector<uint32_t> vertex_cluster;
+  if (placement == VertexPlacement::closest) {
+    vertex_cluster.assign(mesh.vertex_count(), kUnset);
+    for (size_t f = 0; f < mesh.face_count(); ++f) {
+      const uint32_t* t = &mesh.indices[3 * f];
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;  // collapsed: as coarsen_clustering
+      for (int c = 0; c < 3; ++c) {
+        uint32_t& state = vertex_cluster[t[c]];
+        if (state != labels[f]) state = state == kUnset ? labels[f] : kSeveral;
+      }
+    }
+  }
+  return detail::place_cluster_vertices(mesh, labels, clusters, placement, face_weights, vertex_cluster,
+                                        detail::mass_centroids(mesh, labels, clusters, face_weights), 0);
+}
+
+VertexPlacement parse_vertex_placement(const std::string& s) {
+  if (s == "closest") return VertexPlacement::closest;
+  if (s == "projected") return VertexPlacement::projected;
+  if (s == "qem") return VertexPlacement::qem;
+  throw OptionError("unknown vertex placement '" + s + "' (expected closest, projected or qem)");
+}
+
+const char* to_string(VertexPlacement p) {
+  switch (p) {
+    case VertexPlacement::closest: return "closest";
+    case VertexPlacement::projected: return "projected";
+    case VertexPlacement::qem: return "qem";
+  }
+  return "?";
+}
+
+}  // namespace meshcvt

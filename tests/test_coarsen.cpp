@@ -1,0 +1,810 @@
+// Tests for uniform coarsening (src/coarsen.cpp, src/vertex_placement.cpp): the dual mesh of
+// hand-built clusterings of procedural meshes (sphere, planar grids with and without a hole, torus,
+// wheels), checked with an independent count of the output's topology (V - E + F, boundary loops,
+// edge use, orientation, areas); the defects of broken clusterings; the three vertex placements.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <numbers>
+#include <set>
+#include <utility>
+#include <vector>
+
+#include "meshcvt/coarsen.h"
+#include "meshcvt/error.h"
+#include "meshcvt/topology.h"
+#include "triangle_bvh.h"
+
+using namespace meshcvt;
+
+namespace {
+
+// ---- procedural meshes (with a label per face)
+
+struct Labeled {
+  Mesh mesh;
+  std::vector<uint32_t> labels;
+};
+
+uint32_t add_vertex(Mesh& m, double x, double y, double z) {
+  m.positions.insert(m.positions.end(), {float(x), float(y), float(z)});
+  return uint32_t(m.vertex_count() - 1);
+}
+
+// Midpoint subdivision, 1 -> 4, children keep the parent's label.
+Labeled subdivide(const Labeled& in, int levels) {
+  Labeled out = in;
+  for (int level = 0; level < levels; ++level) {
+    Labeled next;
+    next.mesh.positions = out.mesh.positions;
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> midpoint;
+    auto mid = [&](uint32_t a, uint32_t b) {
+      auto key = std::minmax(a, b);
+      auto it = midpoint.find(key);
+      if (it != midpoint.end()) return it->second;
+      const float* p = &next.mesh.positions[3 * a];
+      const float* q = &next.mesh.positions[3 * b];
+      uint32_t v = add_vertex(next.mesh, 0.5 * (double(p[0]) + q[0]), 0.5 * (double(p[1]) + q[1]),
+                              0.5 * (double(p[2]) + q[2]));
+      midpoint[key] = v;
+      return v;
+    };
+    for (size_t f = 0; f < out.mesh.face_count(); ++f) {
+      uint32_t a = out.mesh.indices[3 * f], b = out.mesh.indices[3 * f + 1], c = out.mesh.indices[3 * f + 2];
+      uint32_t ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
+      next.mesh.indices.insert(next.mesh.indices.end(), {a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca});
+      for (int k = 0; k < 4; ++k) next.labels.push_back(out.labels[f]);
+    }
+    out = std::move(next);
+  }
+  return out;
+}
+
+// Octahedron, outward oriented, faces labeled so that the dual is a tetrahedron: A = the two upper
+// faces with x > 0, B = upper with x < 0, C = lower with y > 0, D = lower with y < 0. Clusters meet
+// in threes at +-x and +-y, in twos at +-z. Subdivided and pushed onto the unit sphere.
+Labeled sphere_four_clusters(int levels) {
+  Labeled o;
+  uint32_t axis[3][2];
+  for (int d = 0; d < 3; ++d)
+    for (int s = 0; s < 2; ++s) {
+      double p[3] = {0, 0, 0};
+      p[d] = s == 0 ? 1 : -1;
+      axis[d][s] = add_vertex(o.mesh, p[0], p[1], p[2]);
+    }
+  for (int sx = 0; sx < 2; ++sx)
+    for (int sy = 0; sy < 2; ++sy)
+      for (int sz = 0; sz < 2; ++sz) {
+        uint32_t x = axis[0][sx], y = axis[1][sy], z = axis[2][sz];
+        bool positive = ((sx + sy + sz) % 2) == 0;  // (x, y, z) is counter-clockwise seen from outside
+        if (positive)
+          o.mesh.indices.insert(o.mesh.indices.end(), {x, y, z});
+        else
+          o.mesh.indices.insert(o.mesh.indices.end(), {x, z, y});
+        uint32_t label = sz == 0 ? (sx == 0 ? 0u : 1u) : (sy == 0 ? 2u : 3u);
+        o.labels.push_back(label);
+      }
+  Labeled s = subdivide(o, levels);
+  for (size_t v = 0; v < s.mesh.vertex_count(); ++v) {
+    float* p = &s.mesh.positions[3 * v];
+    double len = std::sqrt(double(p[0]) * p[0] + double(p[1]) * p[1] + double(p[2]) * p[2]);
+    for (int d = 0; d < 3; ++d) p[d] = float(p[d] / len);
+  }
+  return s;
+}
+
+// Planar grid of nx * ny unit quads in z = 0 (quads where keep(i, j) is false are left out), each
+// split into two counter-clockwise triangles; labels from the quad: label(i, j).
+Labeled grid(int nx, int ny, const std::function<uint32_t(int, int)>& label,
+             const std::function<bool(int, int)>& keep = [](int, int) { return true; }) {
+  Labeled g;
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) add_vertex(g.mesh, i, j, 0);
+  auto id = [&](int i, int j) { return uint32_t(j * (nx + 1) + i); };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      if (!keep(i, j)) continue;
+      g.mesh.indices.insert(g.mesh.indices.end(),
+                            {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+      g.labels.insert(g.labels.end(), 2, label(i, j));
+    }
+  return g;
+}
+
+// Torus: an nx * ny grid wrapped both ways, on a torus of radii 3 and 1.
+Labeled torus(int nx, int ny, const std::function<uint32_t(int, int)>& label) {
+  Labeled t;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      double u = 2 * std::numbers::pi * i / nx, v = 2 * std::numbers::pi * j / ny;
+      add_vertex(t.mesh, (3 + std::cos(v)) * std::cos(u), (3 + std::cos(v)) * std::sin(u), std::sin(v));
+    }
+  auto id = [&](int i, int j) { return uint32_t((j % ny) * nx + (i % nx)); };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      t.mesh.indices.insert(t.mesh.indices.end(),
+                            {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+      t.labels.insert(t.labels.end(), 2, label(i, j));
+    }
+  return t;
+}
+
+// A planar wheel: a center and rim points, one triangle (center, rim[i], rim[i+1]) per sector,
+// subdivided; sector i is cluster i. All sectors meet at the center.
+Labeled wheel(const std::vector<std::array<double, 2>>& rim, int levels) {
+  Labeled w;
+  uint32_t center = add_vertex(w.mesh, 0, 0, 0);
+  for (auto& p : rim) add_vertex(w.mesh, p[0], p[1], 0);
+  uint32_t n = uint32_t(rim.size());
+  for (uint32_t i = 0; i < n; ++i) {
+    w.mesh.indices.insert(w.mesh.indices.end(), {center, 1 + i, 1 + (i + 1) % n});
+    w.labels.push_back(i);
+  }
+  return subdivide(w, levels);
+}
+
+// Unit cube [0,1]^3, 12 outward triangles, subdivided.
+Mesh cube(int levels) {
+  Labeled c;
+  for (int k = 0; k < 8; ++k) add_vertex(c.mesh, k & 1, (k >> 1) & 1, (k >> 2) & 1);
+  const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (auto& q : quads) {
+    c.mesh.indices.insert(c.mesh.indices.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+    c.labels.insert(c.labels.end(), 2, 0);
+  }
+  return subdivide(c, levels).mesh;
+}
+
+// ---- an independent look at the output
+
+struct Surface {
+  int64_t vertices = 0;  // referenced
+  int64_t edges = 0, faces = 0;
+  int64_t boundary_edges = 0, boundary_loops = 0;
+  int64_t overused_edges = 0;   // edges of three or more triangles
+  int64_t repeated_directed = 0;  // a directed edge used twice: orientations disagree
+  int64_t degenerate = 0;       // zero area or a repeated corner
+  std::set<std::pair<uint32_t, uint32_t>> boundary;  // undirected boundary edges
+  int64_t chi() const { return vertices - edges + faces; }
+};
+
+Surface inspect(const Mesh& m) {
+  Surface s;
+  std::map<std::pair<uint32_t, uint32_t>, int> directed;
+  std::map<std::pair<uint32_t, uint32_t>, int> undirected;
+  std::set<uint32_t> used;
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    const uint32_t* t = &m.indices[3 * f];
+    for (int k = 0; k < 3; ++k) {
+      used.insert(t[k]);
+      ++directed[{t[k], t[(k + 1) % 3]}];
+      ++undirected[std::minmax(t[k], t[(k + 1) % 3])];
+    }
+    const float* p[3] = {&m.positions[3 * t[0]], &m.positions[3 * t[1]], &m.positions[3 * t[2]]};
+    double u[3], w[3];
+    for (int d = 0; d < 3; ++d) u[d] = p[1][d] - p[0][d], w[d] = p[2][d] - p[0][d];
+    double cx = u[1] * w[2] - u[2] * w[1], cy = u[2] * w[0] - u[0] * w[2], cz = u[0] * w[1] - u[1] * w[0];
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || std::sqrt(cx * cx + cy * cy + cz * cz) < 1e-9) ++s.degenerate;
+  }
+  s.vertices = int64_t(used.size());
+  s.faces = int64_t(m.face_count());
+  s.edges = int64_t(undirected.size());
+  for (auto& [e, n] : directed) s.repeated_directed += n > 1;
+  // Boundary loops: components of the graph of boundary edges (enough for the simple loops here).
+  std::map<uint32_t, uint32_t> parent;
+  std::function<uint32_t(uint32_t)> find = [&](uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (auto& [e, n] : undirected) {
+    s.overused_edges += n > 2;
+    if (n != 1) continue;
+    ++s.boundary_edges;
+    s.boundary.insert(e);
+    for (uint32_t x : {e.first, e.second})
+      if (!parent.count(x)) parent[x] = x;
+    parent[find(e.first)] = find(e.second);
+  }
+  for (auto& [x, p] : parent) s.boundary_loops += find(x) == x;
+  return s;
+}
+
+bool has_defect(const std::vector<DualDefect>& defects, DualDefect::Kind kind, uint32_t cluster,
+                uint32_t other = kNone) {
+  for (const DualDefect& d : defects)
+    if (d.kind == kind && d.cluster == cluster && (other == kNone || d.other == other)) return true;
+  return false;
+}
+
+CoarsenResult coarsen(const Labeled& l, uint32_t clusters, VertexPlacement placement = VertexPlacement::closest) {
+  Topology topology = build_topology(l.mesh);
+  CoarsenOptions options;
+  options.placement = placement;
+  return coarsen_clustering(l.mesh, topology, l.labels, clusters, options);
+}
+
+bool has_edge(const Mesh& m, uint32_t a, uint32_t b) {
+  for (size_t f = 0; f < m.face_count(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      uint32_t x = m.indices[3 * f + k], y = m.indices[3 * f + (k + 1) % 3];
+      if ((x == a && y == b) || (x == b && y == a)) return true;
+    }
+  return false;
+}
+
+// Block clustering of an nx * ny quad grid into blocks of size x size quads, numbered row by row.
+std::function<uint32_t(int, int)> blocks(int nx, int size) {
+  int per_row = (nx + size - 1) / size;
+  return [=](int i, int j) { return uint32_t((j / size) * per_row + i / size); };
+}
+
+}  // namespace
+
+TEST_CASE("coarsen: four clusters on a sphere give an outward tetrahedron") {
+  Labeled s = sphere_four_clusters(3);
+  CoarsenResult r = coarsen(s, 4);
+  CHECK(r.defects.empty());
+  Surface out = inspect(r.mesh);
+  CHECK(r.mesh.vertex_count() == 4);
+  CHECK(out.vertices == 4);
+  CHECK(out.faces == 4);
+  CHECK(out.edges == 6);
+  CHECK(out.boundary_edges == 0);
+  CHECK(out.chi() == 2);
+  CHECK(out.repeated_directed == 0);
+  CHECK(out.degenerate == 0);
+  CHECK(r.corner_vertices == 4);
+  CHECK(r.polygons_triangulated == 0);
+  // Orientation follows the input: every triangle faces away from the sphere's center.
+  for (size_t f = 0; f < r.mesh.face_count(); ++f) {
+    const float* p[3];
+    for (int k = 0; k < 3; ++k) p[k] = &r.mesh.positions[3 * r.mesh.indices[3 * f + k]];
+    double u[3], w[3], n[3], c[3];
+    for (int d = 0; d < 3; ++d) u[d] = p[1][d] - p[0][d], w[d] = p[2][d] - p[0][d], c[d] = p[0][d] + p[1][d] + p[2][d];
+    n[0] = u[1] * w[2] - u[2] * w[1], n[1] = u[2] * w[0] - u[0] * w[2], n[2] = u[0] * w[1] - u[1] * w[0];
+    CHECK(n[0] * c[0] + n[1] * c[1] + n[2] * c[2] > 0);
+  }
+  // Flipping every input face flips every output triangle.
+  Labeled flipped = s;
+  for (size_t f = 0; f < flipped.mesh.face_count(); ++f)
+    std::swap(flipped.mesh.indices[3 * f + 1], flipped.mesh.indices[3 * f + 2]);
+  CoarsenResult rf = coarsen(flipped, 4);
+  CHECK(rf.defects.empty());
+  REQUIRE(rf.mesh.face_count() == 4);
+  std::set<std::array<uint32_t, 3>> forward, backward;
+  auto canonical = [](uint32_t a, uint32_t b, uint32_t c) {
+    std::array<uint32_t, 3> t{a, b, c};
+    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+    return t;
+  };
+  for (size_t f = 0; f < 4; ++f) {
+    const uint32_t* t = &r.mesh.indices[3 * f];
+    const uint32_t* u = &rf.mesh.indices[3 * f];
+    forward.insert(canonical(t[0], t[2], t[1]));  // reversed
+    backward.insert(canonical(u[0], u[1], u[2]));
+  }
+  CHECK(forward == backward);
+}
+
+TEST_CASE("coarsen: 3x3 blocks of a planar grid give a 3x3 vertex grid with one boundary loop") {
+  Labeled g = grid(9, 9, blocks(9, 3));
+  CoarsenResult r = coarsen(g, 9);
+  CHECK(r.defects.empty());
+  Surface out = inspect(r.mesh);
+  CHECK(out.vertices == 9);
+  CHECK(out.faces == 8);  // four 4-cluster corners, two triangles each
+  CHECK(r.polygons_triangulated == 4);
+  CHECK(out.boundary_edges == 8);
+  CHECK(out.boundary_loops == 1);
+  CHECK(out.chi() == 1);
+  CHECK(out.overused_edges == 0);
+  CHECK(out.repeated_directed == 0);
+  CHECK(out.degenerate == 0);
+  CHECK(r.boundary_edges == 8);
+  // The output boundary follows the input loop: block (0,0) -> (1,0) -> (2,0) -> (2,1) -> ...
+  const uint32_t loop[8] = {0, 1, 2, 5, 8, 7, 6, 3};
+  for (int k = 0; k < 8; ++k) CHECK(out.boundary.count(std::minmax(loop[k], loop[(k + 1) % 8])) == 1);
+  // Orientation follows the input (counter-clockwise seen from +z).
+  for (size_t f = 0; f < r.mesh.face_count(); ++f) {
+    const float* p[3];
+    for (int k = 0; k < 3; ++k) p[k] = &r.mesh.positions[3 * r.mesh.indices[3 * f + k]];
+    CHECK((p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]) > 0);
+  }
+}
+
+TEST_CASE("coarsen: a grid with a hole keeps two boundary loops, corners at the hole are not cut off") {
+  // 15 x 15 quads in 5 x 5 blocks of 3; the center block is a hole.
+  auto hole = [](int i, int j) { return !(i / 3 == 2 && j / 3 == 2); };
+  auto label = [](int i, int j) {
+    uint32_t b = uint32_t((j / 3) * 5 + i / 3);
+    return b > 12 ? b - 1 : b;  // block 12 is the hole
+  };
+  Labeled g = grid(15, 15, label, hole);
+  CoarsenResult r = coarsen(g, 24);
+  CHECK(r.defects.empty());
+  Surface out = inspect(r.mesh);
+  CHECK(out.vertices == 24);
+  // 12 interior 4-cluster corners (2 triangles each) + 4 hole corners where 3 clusters meet.
+  CHECK(out.faces == 28);
+  CHECK(out.boundary_loops == 2);
+  CHECK(out.boundary_edges == 16 + 4);
+  CHECK(out.chi() == 0);
+  CHECK(out.overused_edges == 0);
+  CHECK(out.repeated_directed == 0);
+  CHECK(out.degenerate == 0);
+  // The inner loop runs through the four blocks sharing an edge with the hole: 7, 11, 12, 16
+  // (block numbers 7, 11, 13, 17 before removing the hole).
+  for (auto [a, b] : {std::pair{7u, 12u}, {12u, 16u}, {16u, 11u}, {11u, 7u}})
+    CHECK(out.boundary.count(std::minmax(a, b)) == 1);
+  // Block 6 touches the hole at its corner only: the triangle (11, 6, 7) there keeps it inside.
+  CHECK(has_edge(r.mesh, 6, 7));
+  CHECK(has_edge(r.mesh, 6, 11));
+  CHECK(out.boundary.count({6u, 7u}) == 0);
+}
+
+TEST_CASE("coarsen: a block clustering of a torus keeps chi = 0") {
+  Labeled t = torus(16, 12, [](int i, int j) { return uint32_t((j / 3) * 4 + i / 4); });
+  CoarsenResult r = coarsen(t, 16);
+  CHECK(r.defects.empty());
+  Surface out = inspect(r.mesh);
+  CHECK(out.vertices == 16);
+  CHECK(out.faces == 32);
+  CHECK(out.edges == 48);
+  CHECK(out.chi() == 0);
+  CHECK(out.boundary_edges == 0);
+  CHECK(out.overused_edges == 0);
+  CHECK(out.repeated_directed == 0);
+  CHECK(out.degenerate == 0);
+}
+
+TEST_CASE("coarsen: an n-gon corner gives n - 2 triangles") {
+  for (uint32_t n : {4u, 5u, 7u}) {
+    CAPTURE(n);
+    std::vector<std::array<double, 2>> rim;
+    for (uint32_t i = 0; i < n; ++i) {
+      double a = 2 * std::numbers::pi * (i + 0.3 * (i % 2)) / n;
+      rim.push_back({std::cos(a) * (1 + 0.2 * (i % 3)), std::sin(a) * (1 + 0.2 * (i % 3))});
+    }
+    Labeled w = wheel(rim, 2);
+    CoarsenResult r = coarsen(w, n);
+    CHECK(r.defects.empty());
+    Surface out = inspect(r.mesh);
+    CHECK(out.faces == n - 2);
+    CHECK(r.polygons_triangulated == 1);
+    CHECK(out.boundary_loops == 1);
+    CHECK(out.boundary_edges == n);
+    CHECK(out.chi() == 1);
+    CHECK(out.repeated_directed == 0);
+    CHECK(out.degenerate == 0);
+  }
+}
+
+TEST_CASE("coarsen: a quad corner is split along the diagonal that maximizes the minimum angle") {
+  // The sectors' centroids (the qem points of flat clusters) form a rhombus twice as long as wide:
+  // the short diagonal gives angles >= 53 degrees, the long one 26.6 degrees.
+  // Rim points r_i with (r_i + r_{i+1}) / 3 = the rhombus corners (2,0), (0,1), (-2,0), (0,-1).
+  std::vector<std::array<double, 2>> wide = {{3, -1.5}, {3, 1.5}, {-3, 1.5}, {-3, -1.5}};
+  Labeled w = wheel(wide, 2);
+  CoarsenResult r = coarsen(w, 4, VertexPlacement::qem);
+  REQUIRE(r.mesh.face_count() == 2);
+  CHECK(std::fabs(r.mesh.positions[0] - 2.0f) < 1e-5f);  // sector 0's centroid
+  CHECK(std::fabs(r.mesh.positions[4] - 1.0f) < 1e-5f);  // sector 1's
+  CHECK(has_edge(r.mesh, 1, 3));
+  CHECK(!has_edge(r.mesh, 0, 2));
+  // Numbering the sectors from the next one makes the other diagonal win: not a fixed fan.
+  std::vector<std::array<double, 2>> shifted = {wide[1], wide[2], wide[3], wide[0]};
+  CoarsenResult rt = coarsen(wheel(shifted, 2), 4, VertexPlacement::qem);
+  REQUIRE(rt.mesh.face_count() == 2);
+  CHECK(has_edge(rt.mesh, 0, 2));
+  CHECK(!has_edge(rt.mesh, 1, 3));
+  CHECK(rt.defects.empty());
+  CHECK(r.defects.empty());
+}
+
+TEST_CASE("coarsen: an annulus cluster is reported as not a disk") {
+  // 15 x 15 quads in 5 x 5 blocks; the 8 blocks around the center block form cluster 0 (an
+  // annulus), the center block is cluster 1, the 16 outer blocks clusters 2..17.
+  std::map<int, uint32_t> outer;
+  for (int b = 0; b < 25; ++b)
+    if (std::max(std::abs(b % 5 - 2), std::abs(b / 5 - 2)) == 2) outer[b] = uint32_t(2 + outer.size());
+  auto label = [&](int i, int j) {
+    int bi = i / 3, bj = j / 3, ring = std::max(std::abs(bi - 2), std::abs(bj - 2));
+    return ring == 1 ? 0u : ring == 0 ? 1u : outer.at(bj * 5 + bi);
+  };
+  Labeled g = grid(15, 15, label);
+  Topology topology = build_topology(g.mesh);
+  std::vector<DualDefect> defects = find_dual_defects(g.mesh, topology, g.labels, 18);
+  CHECK(has_defect(defects, DualDefect::cluster_not_disk, 0));
+  for (const DualDefect& d : defects)
+    if (d.kind == DualDefect::cluster_not_disk) CHECK(d.cluster == 0);
+  // The same list as the full construction, which still produces a mesh.
+  CoarsenResult r = coarsen_clustering(g.mesh, topology, g.labels, 18);
+  CHECK(r.defects == defects);
+  CHECK(r.mesh.vertex_count() == 18);
+}
+
+TEST_CASE("coarsen: a disconnected or pinched cluster is reported") {
+  // Cluster 0 in two separate blocks of a 3 x 1 block strip.
+  Labeled g = grid(9, 3, [](int i, int) { return uint32_t(i / 3 == 1 ? 1 : 0); });
+  Topology topology = build_topology(g.mesh);
+  std::vector<DualDefect> defects = find_dual_defects(g.mesh, topology, g.labels, 2);
+  CHECK(has_defect(defects, DualDefect::cluster_not_disk, 0));
+  CHECK(!has_defect(defects, DualDefect::cluster_not_disk, 1));
+  // Checkerboard 2 x 2 blocks: each cluster's blocks touch at the middle vertex only.
+  Labeled c = grid(6, 6, [](int i, int j) { return uint32_t((i / 3 + j / 3) % 2); });
+  Topology ct = build_topology(c.mesh);
+  std::vector<DualDefect> cd = find_dual_defects(c.mesh, ct, c.labels, 2);
+  CHECK(has_defect(cd, DualDefect::cluster_not_disk, 0));
+  CHECK(has_defect(cd, DualDefect::cluster_not_disk, 1));
+}
+
+TEST_CASE("coarsen: a cluster in two pieces whose Euler characteristics add up to 1 is reported") {
+  // 21 x 21 quads in 7 x 7 blocks: cluster 0 is the ring of 8 blocks around the center (chi 0)
+  // plus the far corner block (chi 1), which does not touch the ring. Only connectivity tells.
+  auto label = [](int i, int j) {
+    int bi = i / 3, bj = j / 3, ring = std::max(std::abs(bi - 3), std::abs(bj - 3));
+    if (ring == 1 || (bi == 0 && bj == 0)) return 0u;
+    return ring == 0 ? 1u : 2u;
+  };
+  Labeled g = grid(21, 21, label);
+  Topology topology = build_topology(g.mesh);
+  std::vector<DualDefect> defects = find_dual_defects(g.mesh, topology, g.labels, 3);
+  CHECK(has_defect(defects, DualDefect::cluster_not_disk, 0));
+  CHECK(!has_defect(defects, DualDefect::cluster_not_disk, 1));
+}
+
+TEST_CASE("coarsen: two polygons of the same four clusters take different diagonals") {
+  // Octahedron faces grouped by the quadrant of (x, y): four clusters meeting at +z and at -z in
+  // two 4-cluster corners. The same diagonal at both would give two copies of two triangles; the
+  // second polygon avoids the diagonal the first took, and the dual is a tetrahedron.
+  Labeled s = sphere_four_clusters(2);
+  for (size_t f = 0; f < s.mesh.face_count(); ++f) {
+    double c[3] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 3; ++d) c[d] += s.mesh.positions[3 * s.mesh.indices[3 * f + k] + d];
+    s.labels[f] = (c[0] > 0 ? 0u : 1u) + (c[1] > 0 ? 0u : 2u);
+  }
+  CoarsenResult r = coarsen(s, 4);
+  CHECK(r.defects.empty());
+  CHECK(r.polygons_triangulated == 2);
+  Surface out = inspect(r.mesh);
+  CHECK(out.faces == 4);
+  CHECK(out.edges == 6);
+  CHECK(out.chi() == 2);
+  CHECK(out.boundary_edges == 0);
+  CHECK(out.overused_edges == 0);
+  CHECK(out.repeated_directed == 0);
+}
+
+TEST_CASE("coarsen: a triangle produced twice with the same orientation is kept once") {
+  // A broken clustering of a 4 x 4 quad grid (rows from the top) found by search: clusters 0, 1, 2
+  // meet at two vertices with the same cyclic order.
+  const uint32_t rows[4][4] = {{1, 1, 0, 1}, {0, 1, 0, 1}, {0, 2, 2, 1}, {0, 2, 2, 1}};
+  Labeled g = grid(4, 4, [&](int i, int j) { return rows[3 - j][i]; });
+  CoarsenResult r = coarsen(g, 3);
+  CHECK(r.merged_triangles == 1);
+  std::set<std::array<uint32_t, 3>> seen;
+  for (size_t f = 0; f < r.mesh.face_count(); ++f) {
+    std::array<uint32_t, 3> t{r.mesh.indices[3 * f], r.mesh.indices[3 * f + 1], r.mesh.indices[3 * f + 2]};
+    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+    CHECK(seen.insert(t).second);
+  }
+  CHECK(has_defect(r.defects, DualDefect::double_border, 0, 1));
+}
+
+TEST_CASE("coarsen: two clusters sharing two borders are reported") {
+  // Blocks (4 x 3, 3 quads each):   row 2: A A A A
+  //                                 row 1: C B D A
+  //                                 row 0: A A A A
+  // A (0) is a disk that meets B (1) above and below it; C (2) too.
+  auto label = [](int i, int j) {
+    int bi = i / 3, bj = j / 3;
+    if (bj != 1 || bi == 3) return 0u;
+    return bi == 0 ? 2u : bi == 1 ? 1u : 3u;
+  };
+  Labeled g = grid(12, 9, label);
+  CoarsenResult r = coarsen(g, 4);
+  CHECK(has_defect(r.defects, DualDefect::double_border, 0, 1));
+  CHECK(has_defect(r.defects, DualDefect::double_border, 0, 2));
+  CHECK(!has_defect(r.defects, DualDefect::double_border, 0, 3));
+  CHECK(has_defect(r.defects, DualDefect::nonmanifold_output, 0, 1));
+  CHECK(!has_defect(r.defects, DualDefect::cluster_not_disk, 0));
+  CHECK(inspect(r.mesh).overused_edges > 0);  // what the defect announces
+}
+
+TEST_CASE("coarsen: a cluster meeting the boundary in two arcs is reported") {
+  // Blocks 3 x 3:  A B A / A A A / A C A. A is a disk (an H) meeting the boundary in two arcs.
+  auto label = [](int i, int j) {
+    int bi = i / 3, bj = j / 3;
+    if (bi == 1 && bj == 2) return 1u;
+    if (bi == 1 && bj == 0) return 2u;
+    return 0u;
+  };
+  Labeled g = grid(9, 9, label);
+  CoarsenResult r = coarsen(g, 3);
+  CHECK(has_defect(r.defects, DualDefect::boundary_arcs, 0));
+  CHECK(!has_defect(r.defects, DualDefect::boundary_arcs, 1));
+  CHECK(!has_defect(r.defects, DualDefect::cluster_not_disk, 0));
+  // B's border with A runs from boundary to boundary: no triangle can carry the boundary edge.
+  CHECK(has_defect(r.defects, DualDefect::missing_boundary_edge, 0, 1));
+}
+
+TEST_CASE("coarsen: three clusters on a sphere give two opposite triangles, reported") {
+  // Octahedron faces by octant: x > 0 is A; x < 0 split by y into B and C.
+  Labeled s = sphere_four_clusters(2);
+  for (size_t f = 0; f < s.mesh.face_count(); ++f) {
+    double c[3] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 3; ++d) c[d] += s.mesh.positions[3 * s.mesh.indices[3 * f + k] + d];
+    s.labels[f] = c[0] > 0 ? 0 : c[1] > 0 ? 1 : 2;
+  }
+  CoarsenResult r = coarsen(s, 3);
+  CHECK(r.mesh.face_count() == 2);
+  CHECK(has_defect(r.defects, DualDefect::duplicate_triangle, 0, 1));
+  Surface out = inspect(r.mesh);
+  CHECK(out.repeated_directed == 0);  // the two copies are oppositely oriented
+}
+
+TEST_CASE("coarsen: coincident coarse vertices and flipped input faces are reported") {
+  // Octahedron, one cluster per face: 8 clusters of one face share 6 vertices, so `closest` must
+  // put two clusters on one point. The dual is a cube (six 4-cluster corners, 12 triangles).
+  Labeled o = sphere_four_clusters(0);
+  for (uint32_t f = 0; f < 8; ++f) o.labels[f] = f;
+  CoarsenResult r = coarsen(o, 8);
+  CHECK(r.mesh.face_count() == 12);
+  CHECK(std::any_of(r.defects.begin(), r.defects.end(),
+                    [](const DualDefect& d) { return d.kind == DualDefect::degenerate_triangle; }));
+  CHECK(inspect(r.mesh).degenerate > 0);
+  // With face centroids (qem of a single flat face) the cube has 8 distinct corners: clean.
+  CoarsenResult q = coarsen(o, 8, VertexPlacement::qem);
+  CHECK(q.defects.empty());
+  Surface cube_out = inspect(q.mesh);
+  CHECK(cube_out.chi() == 2);
+  CHECK(cube_out.degenerate == 0);
+
+  // Cluster 0's faces flipped against their neighbours: the output cannot be consistent.
+  Labeled s = sphere_four_clusters(2);
+  for (size_t f = 0; f < s.mesh.face_count(); ++f)
+    if (s.labels[f] == 0) std::swap(s.mesh.indices[3 * f + 1], s.mesh.indices[3 * f + 2]);
+  CoarsenResult flipped = coarsen(s, 4);
+  CHECK(flipped.mesh.face_count() == 4);
+  CHECK(std::any_of(flipped.defects.begin(), flipped.defects.end(),
+                    [](const DualDefect& d) { return d.kind == DualDefect::inconsistent_orientation; }));
+}
+
+TEST_CASE("coarsen: empty clusters and bad inputs") {
+  Labeled g = grid(9, 9, blocks(9, 3));
+  Topology topology = build_topology(g.mesh);
+  // An unused cluster id: reported, its vertex unused.
+  CoarsenResult r = coarsen_clustering(g.mesh, topology, g.labels, 10);
+  CHECK(r.mesh.vertex_count() == 10);
+  CHECK(has_defect(r.defects, DualDefect::empty_cluster, 9));
+  CHECK(r.defects.size() == 1);
+  CHECK(r.mesh.face_count() == 8);
+  std::vector<uint32_t> bad = g.labels;
+  bad[5] = 9;
+  CHECK_THROWS_AS(coarsen_clustering(g.mesh, topology, bad, 9), OptionError);
+  bad.pop_back();
+  CHECK_THROWS_AS(coarsen_clustering(g.mesh, topology, bad, 9), OptionError);
+  std::vector<float> weights(g.mesh.face_count(), 1.0f);
+  weights[3] = -1;
+  CHECK_THROWS_AS(coarsen_clustering(g.mesh, topology, g.labels, 9, {}, &weights), OptionError);
+  weights.pop_back();
+  CHECK_THROWS_AS(coarsen_clustering(g.mesh, topology, g.labels, 9, {}, &weights), OptionError);
+  Topology other = build_topology(grid(3, 3, blocks(3, 3)).mesh);
+  CHECK_THROWS_AS(coarsen_clustering(g.mesh, other, g.labels, 9), OptionError);
+  CHECK(parse_vertex_placement("qem") == VertexPlacement::qem);
+  CHECK(parse_vertex_placement("closest") == VertexPlacement::closest);
+  CHECK(parse_vertex_placement("projected") == VertexPlacement::projected);
+  CHECK_THROWS_AS(parse_vertex_placement("centroid"), OptionError);
+  CHECK(std::string(to_string(VertexPlacement::projected)) == "projected");
+  CHECK(std::string(to_string(DualDefect::double_border)) == "double_border");
+}
+
+TEST_CASE("coarsen: closest placement picks a vertex of the cluster near its centroid") {
+  Labeled s = sphere_four_clusters(3);
+  std::vector<float> p = place_cluster_vertices(s.mesh, s.labels, 4, VertexPlacement::closest);
+  CHECK(p == coarsen(s, 4).mesh.positions);  // the points the dual uses
+  std::vector<float> c = cluster_mass_centroids(s.mesh, s.labels, 4);
+  for (uint32_t i = 0; i < 4; ++i) {
+    CAPTURE(i);
+    // p_i is a corner of a face of cluster i, and no corner of the cluster is closer to c_i.
+    bool found = false;
+    double best = INFINITY, chosen = 0;
+    for (size_t f = 0; f < s.mesh.face_count(); ++f) {
+      if (s.labels[f] != i) continue;
+      for (int k = 0; k < 3; ++k) {
+        const float* v = &s.mesh.positions[3 * s.mesh.indices[3 * f + k]];
+        double d2 = 0;
+        for (int d = 0; d < 3; ++d) d2 += (double(v[d]) - c[3 * i + d]) * (double(v[d]) - c[3 * i + d]);
+        best = std::min(best, d2);
+        if (v[0] == p[3 * i] && v[1] == p[3 * i + 1] && v[2] == p[3 * i + 2]) found = true, chosen = d2;
+      }
+    }
+    CHECK(found);
+    CHECK(chosen == best);
+  }
+}
+
+TEST_CASE("coarsen: clusters of a single face each get their own corner") {
+  // Four fat sectors of a square wheel, one face each: every centroid is nearest the shared center,
+  // so the nearest corner alone would put all four coarse vertices on it.
+  Labeled w = wheel({{1, 0}, {0, 1}, {-1, 0}, {0, -1}}, 0);
+  std::vector<float> p = place_cluster_vertices(w.mesh, w.labels, 4, VertexPlacement::closest);
+  std::set<std::array<float, 3>> distinct;
+  for (uint32_t i = 0; i < 4; ++i) distinct.insert({p[3 * i], p[3 * i + 1], p[3 * i + 2]});
+  CHECK(distinct.size() == 4);
+  CHECK(p[0] == 0.0f);  // cluster 0 still gets the nearest corner, the center
+  CHECK(p[1] == 0.0f);
+}
+
+TEST_CASE("coarsen: mass centroids follow the face weights") {
+  Labeled g = grid(4, 2, [](int, int) { return 0u; });
+  std::vector<float> c = cluster_mass_centroids(g.mesh, g.labels, 1);
+  CHECK(c[0] == doctest::Approx(2.0));
+  CHECK(c[1] == doctest::Approx(1.0));
+  std::vector<float> weights(g.mesh.face_count(), 1.0f);
+  for (size_t f = 0; f < weights.size(); ++f)
+    if (g.mesh.positions[3 * g.mesh.indices[3 * f]] >= 2) weights[f] = 3.0f;  // right half weighs 3
+  c = cluster_mass_centroids(g.mesh, g.labels, 1, &weights);
+  CHECK(c[0] == doctest::Approx((1.0 * 1 + 3.0 * 3) / 4));
+  CHECK(c[1] == doctest::Approx(1.0));
+}
+
+TEST_CASE("coarsen: qem on a flat cluster lies in its plane, at a cube corner recovers the corner") {
+  // A grid turned into a tilted plane; two clusters.
+  Labeled g = grid(6, 6, [](int i, int) { return uint32_t(i / 3); });
+  const double n[3] = {0.36, 0.48, 0.8};  // unit normal of the plane after the map below
+  for (size_t v = 0; v < g.mesh.vertex_count(); ++v) {
+    float* p = &g.mesh.positions[3 * v];
+    double x = p[0], y = p[1];
+    // Orthonormal basis of the plane n . q = 2: e1 = (0.8, 0, -0.36)/|.|, e2 = n x e1.
+    double e1[3] = {0.8, 0, -0.36}, l1 = std::sqrt(0.8 * 0.8 + 0.36 * 0.36);
+    for (double& e : e1) e /= l1;
+    double e2[3] = {n[1] * e1[2] - n[2] * e1[1], n[2] * e1[0] - n[0] * e1[2], n[0] * e1[1] - n[1] * e1[0]};
+    for (int d = 0; d < 3; ++d) p[d] = float(2 * n[d] + x * e1[d] + y * e2[d]);
+  }
+  std::vector<float> q = place_cluster_vertices(g.mesh, g.labels, 2, VertexPlacement::qem);
+  std::vector<float> c = cluster_mass_centroids(g.mesh, g.labels, 2);
+  for (int i = 0; i < 2; ++i) {
+    double offset = n[0] * q[3 * i] + n[1] * q[3 * i + 1] + n[2] * q[3 * i + 2] - 2;
+    CHECK(std::fabs(offset) < 1e-5);
+    for (int d = 0; d < 3; ++d) CHECK(q[3 * i + d] == doctest::Approx(c[3 * i + d]).epsilon(1e-5));
+  }
+
+  // The three quarter-faces around the corner (1,1,1) of the unit cube.
+  Mesh box = cube(3);
+  std::vector<uint32_t> labels(box.face_count());
+  for (size_t f = 0; f < box.face_count(); ++f) {
+    double m[3] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 3; ++d) m[d] += box.positions[3 * box.indices[3 * f + k] + d] / 3.0;
+    labels[f] = m[0] > 0.5 && m[1] > 0.5 && m[2] > 0.5 ? 0 : 1;
+  }
+  std::vector<float> corner = place_cluster_vertices(box, labels, 2, VertexPlacement::qem);
+  for (int d = 0; d < 3; ++d) CHECK(corner[d] == doctest::Approx(1.0).epsilon(1e-6));
+  std::vector<float> centroid = cluster_mass_centroids(box, labels, 2);
+  CHECK(centroid[0] < 0.9f);  // the centroid itself is well inside
+}
+
+TEST_CASE("coarsen: projected placement lies on the surface, closest to the centroid") {
+  Labeled s = sphere_four_clusters(3);
+  std::vector<float> p = place_cluster_vertices(s.mesh, s.labels, 4, VertexPlacement::projected);
+  std::vector<float> c = cluster_mass_centroids(s.mesh, s.labels, 4);
+  for (uint32_t i = 0; i < 4; ++i) {
+    CAPTURE(i);
+    // Brute force over all faces: distance of p_i to the surface, and the surface's distance to c_i.
+    double on_surface = INFINITY, to_centroid = INFINITY;
+    for (size_t f = 0; f < s.mesh.face_count(); ++f) {
+      double a[3], b[3], cc[3], pi[3], ci[3], x[3];
+      for (int d = 0; d < 3; ++d) {
+        a[d] = s.mesh.positions[3 * s.mesh.indices[3 * f] + d];
+        b[d] = s.mesh.positions[3 * s.mesh.indices[3 * f + 1] + d];
+        cc[d] = s.mesh.positions[3 * s.mesh.indices[3 * f + 2] + d];
+        pi[d] = p[3 * i + d];
+        ci[d] = c[3 * i + d];
+      }
+      on_surface = std::min(on_surface, closest_point_on_triangle(pi, a, b, cc, x));
+      to_centroid = std::min(to_centroid, closest_point_on_triangle(ci, a, b, cc, x));
+    }
+    CHECK(on_surface < 1e-10);
+    double d2 = 0;
+    for (int d = 0; d < 3; ++d) d2 += (double(p[3 * i + d]) - c[3 * i + d]) * (double(p[3 * i + d]) - c[3 * i + d]);
+    CHECK(d2 == doctest::Approx(to_centroid).epsilon(1e-4));
+    CHECK(d2 > 1e-4);  // the centroid is inside the sphere, not on it
+  }
+  // The dual with projected vertices is still the tetrahedron.
+  CoarsenResult r = coarsen(s, 4, VertexPlacement::projected);
+  CHECK(r.defects.empty());
+  CHECK(r.mesh.face_count() == 4);
+}
+
+TEST_CASE("coarsen: the result does not depend on the thread count") {
+  // 51200 faces: large enough for the two-thread path. Blocks of 10 x 10 quads, one annulus.
+  Labeled g = grid(160, 160, [](int i, int j) {
+    int bi = i / 10, bj = j / 10;
+    if (std::max(std::abs(bi - 8), std::abs(bj - 8)) == 1) return 0u;  // a ring of 8 blocks
+    return uint32_t(bj * 16 + bi);
+  });
+  REQUIRE(g.mesh.face_count() >= 50000);
+  Topology topology = build_topology(g.mesh);
+  for (VertexPlacement placement : {VertexPlacement::closest, VertexPlacement::qem}) {
+    CoarsenOptions one, many;
+    one.placement = many.placement = placement;
+    one.threads = 1;
+    many.threads = 0;
+    CoarsenResult a = coarsen_clustering(g.mesh, topology, g.labels, 256, one);
+    CoarsenResult b = coarsen_clustering(g.mesh, topology, g.labels, 256, many);
+    CHECK(a.mesh.positions == b.mesh.positions);
+    CHECK(a.mesh.indices == b.mesh.indices);
+    CHECK(a.defects == b.defects);
+    CHECK(has_defect(a.defects, DualDefect::cluster_not_disk, 0));
+    CHECK(a.mesh.face_count() > 300);
+  }
+}
+
+TEST_CASE("coarsen: arbitrary labels and broken meshes give a mesh, never a crash") {
+  // Small deterministic generator (xorshift64*).
+  uint64_t state = 0x9e3779b97f4a7c15ull;
+  auto next = [&](uint32_t bound) {
+    state ^= state >> 12, state ^= state << 25, state ^= state >> 27;
+    return uint32_t(((state * 0x2545f4914f6cdd1dull) >> 33) % bound);
+  };
+  auto check = [](const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters) {
+    Topology topology = build_topology(mesh);
+    for (VertexPlacement placement : {VertexPlacement::closest, VertexPlacement::qem}) {
+      CoarsenOptions options;
+      options.placement = placement;
+      CoarsenResult r = coarsen_clustering(mesh, topology, labels, clusters, options);
+      CHECK(r.mesh.vertex_count() == clusters);
+      for (size_t f = 0; f < r.mesh.face_count(); ++f) {
+        const uint32_t* t = &r.mesh.indices[3 * f];
+        CHECK(t[0] < clusters);
+        CHECK(t[1] < clusters);
+        CHECK(t[2] < clusters);
+        CHECK((t[0] != t[1] && t[1] != t[2] && t[0] != t[2]));
+      }
+      for (float x : r.mesh.positions) CHECK(std::isfinite(x));
+      CHECK(find_dual_defects(mesh, topology, labels, clusters, options) == r.defects);
+    }
+  };
+  // Random labels on a sphere: clusters of every shape, pinched, scattered.
+  Labeled s = sphere_four_clusters(2);
+  for (uint32_t clusters : {1u, 2u, 5u, 40u}) {
+    std::vector<uint32_t> labels(s.mesh.face_count());
+    for (uint32_t& l : labels) l = next(clusters);
+    check(s.mesh, labels, clusters);
+  }
+  // A triangle soup on few vertices: non-manifold edges and vertices, flipped neighbours,
+  // duplicated and collapsed faces.
+  Mesh soup;
+  for (int v = 0; v < 12; ++v) add_vertex(soup, next(1000) / 100.0, next(1000) / 100.0, next(1000) / 100.0);
+  for (int f = 0; f < 60; ++f) {
+    uint32_t a = next(12), b = next(12), c = next(12);
+    if (f % 10 == 0) b = a;  // collapsed
+    soup.indices.insert(soup.indices.end(), {a, b, c});
+  }
+  for (uint32_t clusters : {1u, 3u, 8u}) {
+    std::vector<uint32_t> labels(soup.face_count());
+    for (uint32_t& l : labels) l = next(clusters);
+    check(soup, labels, clusters);
+  }
+  // Two cones sharing their apex (a non-manifold vertex), one cluster per cone side.
+  Mesh cones;
+  uint32_t apex = add_vertex(cones, 0, 0, 0);
+  for (int side = 0; side < 2; ++side) {
+    uint32_t first = uint32_t(cones.vertex_count());
+    for (int k = 0; k < 6; ++k) {
+      double a = 2 * std::numbers::pi * k / 6;
+      add_vertex(cones, std::cos(a), std::sin(a), side ? 1 : -1);
+    }
+    for (uint32_t k = 0; k < 6; ++k) cones.indices.insert(cones.indices.end(), {apex, first + k, first + (k + 1) % 6});
+  }
+  std::vector<uint32_t> cone_labels(cones.face_count());
+  for (size_t f = 0; f < cone_labels.size(); ++f) cone_labels[f] = uint32_t(f / 3);  // 4 clusters, 2 per cone
+  check(cones, cone_labels, 4);
+}
