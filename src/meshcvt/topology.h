@@ -8,53 +8,99 @@
 
 namespace meshcvt {
 
-/// Connectivity of a triangle mesh. Edge e of face f joins corners e and (e+1)%3 of f.
+/// Connectivity of a triangle mesh. Edge e of face f joins corners e and (e+1)%3 of f; it is the
+/// half-edge h = 3f + e, which starts at vertex indices[h].
 ///
 /// Faces are adjacent only across manifold edges (exactly two faces, any orientation); a
 /// non-manifold edge (three or more faces) links nobody and is counted.
+///
+/// A *collapsed* face (two or three equal corner indices, e.g. left by welding) has no edges: it
+/// is adjacent to nobody, forms a component of its own, and its neighbours meet each other
+/// across the edge it collapsed onto as if it were not there. It is still listed in vertex_faces
+/// (once per distinct vertex) and counted in degenerate_faces.
 struct Topology {
-  /// face_adjacent[3*f + e]: the face across edge e of face f, or kNone (boundary or non-manifold).
+  /// face_adjacent[3*f + e]: the face across edge e of face f, or kNone (boundary, non-manifold
+  /// or collapsed). Symmetric: if g = face_adjacent[3f+e] then g has an edge with the same two
+  /// vertices whose entry is f.
   std::vector<uint32_t> face_adjacent;
 
   /// Vertex -> incident faces, CSR: faces of vertex v are
-  /// vertex_faces[vertex_face_offsets[v] .. vertex_face_offsets[v+1]), in increasing face id.
+  /// vertex_faces[vertex_face_offsets[v] .. vertex_face_offsets[v+1]), in increasing face id, each
+  /// face once. Unreferenced vertices have an empty range.
   std::vector<uint32_t> vertex_face_offsets;  // vertex_count + 1 entries
   std::vector<uint32_t> vertex_faces;
 
   /// Connected components of the face graph (across manifold edges): id per face, numbered in
-  /// order of their lowest face.
+  /// order of their lowest face (face 0 is in component 0).
   std::vector<uint32_t> face_component;
   uint32_t component_count = 0;
 
-  uint64_t edge_count = 0;             ///< distinct undirected edges
+  uint64_t edge_count = 0;             ///< distinct undirected edges {a, b}, a != b
   uint64_t boundary_edges = 0;         ///< edges with one face
-  uint64_t boundary_loops = 0;         ///< closed chains of boundary edges
+  /// Chains of boundary edges. At each end of a boundary edge the chain goes on to the boundary
+  /// edge that closes the same fan of faces around that vertex (not just any boundary edge there),
+  /// so two holes touching at one vertex are two loops. A chain cut short by a non-manifold edge
+  /// still counts as one loop.
+  uint64_t boundary_loops = 0;
   uint64_t nonmanifold_edges = 0;      ///< edges with three or more faces
-  uint64_t nonmanifold_vertices = 0;   ///< vertices whose face fan is not one disk or half-disk
-  uint64_t degenerate_faces = 0;       ///< zero area (repeated corner or collinear)
-  uint64_t duplicate_faces = 0;        ///< same three vertices as an earlier face (any order)
+  /// Referenced vertices whose faces, linked through the manifold edges at the vertex, fall into
+  /// more than one fan (e.g. the bow-tie, or any vertex of a non-manifold edge). Collapsed faces
+  /// are not part of any fan.
+  uint64_t nonmanifold_vertices = 0;
+  uint64_t degenerate_faces = 0;       ///< zero area: collapsed, or cross product exactly zero (in double)
+  /// Faces with the same three vertices as an earlier face, in any order and orientation (for
+  /// collapsed faces: the same sorted corner triple).
+  uint64_t duplicate_faces = 0;
   uint64_t referenced_vertices = 0;    ///< vertices used by at least one face
+
+  // ---- extensions (beyond the first contract)
+  uint64_t collapsed_faces = 0;        ///< faces with a repeated corner index (part of degenerate_faces)
+  /// Manifold edges whose two faces run along them in the same direction, i.e. neighbours with
+  /// inconsistent orientation. 0 for a consistently oriented mesh.
+  uint64_t orientation_flips = 0;
+  /// Components whose faces cannot all be flipped to agree (a Moebius strip, a Klein bottle).
+  /// Only searched for when orientation_flips > 0.
+  uint32_t nonorientable_components = 0;
 };
 
-/// Builds the connectivity of `mesh`. O(F log F) time, about 40 bytes per face.
+/// Builds the connectivity of `mesh`.
+///
+/// Input : mesh with F faces and V vertices; indices must be < V (asserted in debug builds;
+///         checked: throws OptionError otherwise). At most 1431655765 faces (3F half-edges must
+///         fit in 32 bits; OptionError otherwise).
+/// Output: the Topology above. O(F + V) time apart from sorting the few edges at each vertex;
+///         about 30 bytes per face for the result (face_adjacent, vertex_faces, face_component,
+///         vertex_face_offsets) and only per-vertex scratch besides. Uses up to 2 threads on
+///         large meshes; the result does not depend on it.
 Topology build_topology(const Mesh& mesh);
 
-/// Summary printed by `meshcvt info`.
+/// Summary printed by `meshcvt info`. Counts are those of Topology; lengths and areas are in the
+/// input's units.
 struct MeshInfo {
-  uint64_t vertices = 0, faces = 0, edges = 0;
+  uint64_t vertices = 0;  ///< referenced vertices
+  uint64_t faces = 0, edges = 0;
   uint32_t components = 0;
   uint64_t boundary_edges = 0, boundary_loops = 0;
   uint64_t nonmanifold_edges = 0, nonmanifold_vertices = 0;
   uint64_t degenerate_faces = 0, duplicate_faces = 0;
-  int64_t euler_characteristic = 0;  ///< V - E + F over referenced vertices
-  /// Genus, defined when the mesh is one closed, manifold, connected surface: (2 - chi) / 2.
-  /// For an orientable manifold with boundary: (2 - chi - loops) / 2. -1 when not defined.
+  int64_t euler_characteristic = 0;  ///< chi = V - E + F over referenced vertices
+  /// Genus, total over components. Defined when the mesh is an orientable 2-manifold, possibly with
+  /// boundary: no non-manifold edge or vertex, no collapsed face, no non-orientable component.
+  /// Then each component i has chi_i = 2 - 2 g_i - b_i, so the sum is
+  ///   genus = (2 C - chi - B) / 2      (C components, B boundary loops),
+  /// which for one closed surface is the usual (2 - chi) / 2 and for one surface with boundary
+  /// (2 - chi - B) / 2. -1 when not defined.
   int64_t genus = -1;
-  float bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};
-  double total_area = 0;  ///< in squared input units
+  float bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};  ///< over referenced vertices; zeros if none
+  double total_area = 0;  ///< sum of triangle areas in double, in squared input units
+
+  // ---- extensions
+  uint64_t orientation_flips = 0;         ///< Topology::orientation_flips
+  uint32_t nonorientable_components = 0;  ///< Topology::nonorientable_components
+  uint64_t collapsed_faces = 0;           ///< Topology::collapsed_faces
 };
 
-/// Fills MeshInfo from a mesh and its topology.
+/// Fills MeshInfo from a mesh and the topology build_topology(mesh) returned. O(F + V).
 MeshInfo mesh_info(const Mesh& mesh, const Topology& topology);
 
 }  // namespace meshcvt

@@ -1,0 +1,225 @@
+// meshcvt: midpoint subdivision, 1 triangle -> 4 per level, with one shared midpoint per edge.
+//
+// Each level groups the half-edges by their lower vertex with a counting sort (key: higher vertex,
+// half-edge), so the half-edges of an edge end up next to each other without a hash table; a run of
+// equal keys is one edge and gets one new vertex. Vertex ranges are split over two threads with the
+// new vertex ids handed out per range after a count, so the result does not depend on the split.
+#include "meshcvt/subdivide.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <exception>
+#include <string>
+#include <system_error>
+#include <thread>
+#include <vector>
+
+#include "meshcvt/error.h"
+
+namespace meshcvt {
+
+namespace {
+
+constexpr uint64_t kMaxFaces = 0xffffffffu / 3;     // 3F half-edge ids fit in 32 bits
+constexpr uint64_t kMaxVertices = 0xfffffffeu;      // below kNone
+
+inline uint32_t next_half_edge(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
+
+// Runs fn(begin, end, part) for the ranges [bounds[p], bounds[p+1]), part 0 on the calling thread,
+// and rethrows the first exception (e.g. bad_alloc) after every thread has finished.
+template <class Fn>
+void run_ranges(const std::vector<uint32_t>& bounds, const Fn& fn) {
+  size_t parts = bounds.size() - 1;
+  std::vector<std::exception_ptr> errors(parts);
+  auto guarded = [&](size_t p) {
+    try {
+      fn(bounds[p], bounds[p + 1], p);
+    } catch (...) {
+      errors[p] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> threads;
+  for (size_t p = 1; p < parts; ++p) {
+    try {
+      threads.emplace_back(guarded, p);
+    } catch (const std::system_error&) {
+      guarded(p);  // no thread to be had: do that part here
+    }
+  }
+  if (parts > 0) guarded(0);
+  for (auto& t : threads) t.join();
+  for (auto& e : errors)
+    if (e) std::rethrow_exception(e);
+}
+
+// Splits [0, count) into ranges of about equal weight, weight given by the CSR `offsets`.
+std::vector<uint32_t> split_by_offsets(const std::vector<uint32_t>& offsets, size_t count, bool parallel) {
+  unsigned parts = parallel ? std::min(2u, std::max(1u, std::thread::hardware_concurrency())) : 1u;
+  std::vector<uint32_t> bounds{0};
+  for (unsigned p = 1; p < parts; ++p) {
+    uint32_t goal = uint32_t(uint64_t(offsets[count]) * p / parts);
+    auto it = std::lower_bound(offsets.begin() + bounds.back(), offsets.begin() + count, goal);
+    bounds.push_back(uint32_t(it - offsets.begin()));
+  }
+  bounds.push_back(uint32_t(count));
+  return bounds;
+}
+
+void sort_small(uint64_t* first, uint64_t* last) {
+  if (last - first > 24) {
+    std::sort(first, last);
+    return;
+  }
+  for (uint64_t* i = first + 1; i < last; ++i) {
+    uint64_t k = *i;
+    uint64_t* j = i;
+    for (; j > first && j[-1] > k; --j) *j = j[-1];
+    *j = k;
+  }
+}
+
+// One level: `in` -> `out`, faces 4f..4f+3 from face f.
+void subdivide_level(const Mesh& in, Mesh& out) {
+  size_t nv = in.vertex_count(), nf = in.face_count();
+  const uint32_t* indices = in.indices.data();
+  bool parallel = nf >= 65536;
+
+  // Half-edges grouped by lower vertex: counting sort, keys (higher vertex << 32 | half-edge).
+  std::vector<uint32_t> offsets(nv + 1, 0);
+  for (uint32_t h = 0; h < 3 * nf; ++h) {
+    uint32_t a = indices[h], b = indices[next_half_edge(h)];
+    if (a != b) ++offsets[std::min(a, b) + 1];
+  }
+  for (size_t v = 0; v < nv; ++v) offsets[v + 1] += offsets[v];
+  std::vector<uint64_t> keys(offsets[nv]);
+  for (uint32_t h = 0; h < 3 * nf; ++h) {
+    uint32_t a = indices[h], b = indices[next_half_edge(h)];
+    if (a != b) keys[offsets[std::min(a, b)]++] = uint64_t(std::max(a, b)) << 32 | h;
+  }
+  for (size_t v = nv; v > 0; --v) offsets[v] = offsets[v - 1];
+  offsets[0] = 0;
+
+  // Pass 1: sort each vertex's keys and count its edges, per range.
+  std::vector<uint32_t> bounds = split_by_offsets(offsets, nv, parallel);
+  std::vector<uint64_t> range_edges(bounds.size() - 1, 0);
+  run_ranges(bounds, [&](uint32_t begin, uint32_t end, size_t part) {
+    uint64_t edges = 0;
+    for (uint32_t v = begin; v < end; ++v) {
+      uint64_t* first = keys.data() + offsets[v];
+      uint64_t* last = keys.data() + offsets[v + 1];
+      sort_small(first, last);
+      for (uint64_t* k = first; k < last; ++k) edges += k == first || (*k >> 32) != (k[-1] >> 32);
+    }
+    range_edges[part] = edges;
+  });
+  uint64_t edge_total = 0;
+  std::vector<uint64_t> range_first(range_edges.size());
+  for (size_t p = 0; p < range_edges.size(); ++p) {
+    range_first[p] = nv + edge_total;
+    edge_total += range_edges[p];
+  }
+  if (nv + edge_total > kMaxVertices)
+    throw OptionError("subdivision would make " + std::to_string(nv + edge_total) +
+                      " vertices; at most 4294967294 are supported");
+
+  // Pass 2: one new vertex per run of equal keys, at the edge midpoint.
+  out.positions.resize(3 * (nv + edge_total));
+  std::copy(in.positions.begin(), in.positions.end(), out.positions.begin());
+  std::vector<uint32_t> midpoint(3 * nf);
+  // A collapsed edge (a, a) has no key; its "midpoint" is a.
+  for (uint32_t h = 0; h < 3 * nf; ++h)
+    if (indices[h] == indices[next_half_edge(h)]) midpoint[h] = indices[h];
+  run_ranges(bounds, [&](uint32_t begin, uint32_t end, size_t part) {
+    uint32_t id = uint32_t(range_first[part]);
+    const float* p = in.positions.data();
+    float* q = out.positions.data();
+    for (uint32_t v = begin; v < end; ++v) {
+      const uint64_t* first = keys.data() + offsets[v];
+      const uint64_t* last = keys.data() + offsets[v + 1];
+      for (const uint64_t* k = first; k < last; ++k) {
+        uint32_t hi = uint32_t(*k >> 32);
+        if (k == first || hi != uint32_t(k[-1] >> 32)) {
+          // 0.5a + 0.5b rather than (a + b) / 2: no overflow near FLT_MAX, and symmetric in a, b.
+          for (int c = 0; c < 3; ++c) q[3 * size_t(id) + c] = 0.5f * p[3 * size_t(v) + c] + 0.5f * p[3 * size_t(hi) + c];
+          ++id;
+        }
+        midpoint[uint32_t(*k)] = id - 1;
+      }
+    }
+    assert(id == range_first[part] + range_edges[part]);
+  });
+  keys = {};
+
+  out.indices.resize(12 * nf);
+  std::vector<uint32_t> face_bounds{0};
+  if (parallel) face_bounds.push_back(uint32_t(nf / 2));
+  face_bounds.push_back(uint32_t(nf));
+  run_ranges(face_bounds, [&](uint32_t begin, uint32_t end, size_t) {
+    uint32_t* o = out.indices.data();
+    for (size_t f = begin; f < end; ++f) {
+      uint32_t a = indices[3 * f], b = indices[3 * f + 1], c = indices[3 * f + 2];
+      uint32_t ab = midpoint[3 * f], bc = midpoint[3 * f + 1], ca = midpoint[3 * f + 2];
+      uint32_t* t = o + 12 * f;
+      t[0] = a,  t[1] = ab, t[2] = ca;
+      t[3] = ab, t[4] = b,  t[5] = bc;
+      t[6] = ca, t[7] = bc, t[8] = c;
+      t[9] = ab, t[10] = bc, t[11] = ca;
+    }
+  });
+}
+
+}  // namespace
+
+Mesh subdivide_midpoint(const Mesh& mesh, unsigned levels) {
+  size_t nv = mesh.vertex_count(), nf = mesh.face_count();
+  if (mesh.indices.size() % 3 != 0 || mesh.positions.size() % 3 != 0)
+    throw OptionError("mesh arrays are not whole triangles / vertices");
+  for (uint32_t i : mesh.indices)
+    if (i >= nv)
+      throw OptionError("mesh uses vertex " + std::to_string(i) + " but has " + std::to_string(nv) + " vertices");
+  if (!mesh.source_polygon.empty() && mesh.source_polygon.size() != nf)
+    throw OptionError("mesh has " + std::to_string(mesh.source_polygon.size()) + " source_polygon entries for " +
+                      std::to_string(nf) + " faces");
+  if (levels == 0 || nf == 0) return mesh;
+  // Check the final size before doing any work.
+  uint64_t faces = nf;
+  for (unsigned k = 0; k < levels && faces > 0; ++k) {
+    faces *= 4;
+    if (faces > kMaxFaces)
+      throw OptionError(std::to_string(levels) + " subdivision levels of " + std::to_string(nf) +
+                        " faces make more than " + std::to_string(kMaxFaces) + " faces");
+  }
+
+  Mesh current, next;
+  const Mesh* in = &mesh;
+  for (unsigned k = 0; k < levels; ++k) {
+    subdivide_level(*in, next);
+    std::swap(current, next);
+    in = &current;
+  }
+  // Children of input face f are [f * 4^levels, (f + 1) * 4^levels): shift by 2 bits per level.
+  current.source_polygon.resize(current.face_count());
+  unsigned shift = 2 * levels;
+  for (size_t i = 0; i < current.face_count(); ++i) {
+    size_t f = i >> shift;
+    current.source_polygon[i] = mesh.source_polygon.empty() ? uint32_t(f) : mesh.source_polygon[f];
+  }
+  return current;
+}
+
+unsigned subdivision_levels_for(size_t faces, uint32_t clusters, double min_faces_per_cluster) {
+  if (!(min_faces_per_cluster >= 0) || !std::isfinite(min_faces_per_cluster))
+    throw OptionError("minimum faces per cluster must be a finite number >= 0, not " +
+                      std::to_string(min_faces_per_cluster));
+  double target = double(clusters) * min_faces_per_cluster;
+  double have = double(faces);
+  if (have >= target) return 0;
+  if (faces == 0) throw OptionError("a mesh with no faces cannot be subdivided to reach " + std::to_string(clusters) + " clusters");
+  // have grows by 4x per step and target is finite, so this ends (after ~log4(target) steps).
+  unsigned k = 0;
+  for (; have < target; ++k) have *= 4;
+  return k;
+}
+
+}  // namespace meshcvt

@@ -1,0 +1,168 @@
+// Tests for midpoint subdivision: face counts, shared midpoints (watertight, same Euler
+// characteristic), area, orientation, source_polygon, and subdivision_levels_for.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "meshcvt/error.h"
+#include "meshcvt/mesh.h"
+#include "meshcvt/subdivide.h"
+#include "meshcvt/topology.h"
+
+using meshcvt::Mesh;
+
+namespace {
+
+Mesh octahedron() {
+  Mesh m;
+  m.positions = {1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1};
+  m.indices = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+  return m;
+}
+
+// An open strip of 2 x 1 quads (a disk with one boundary loop).
+Mesh strip() {
+  Mesh m;
+  m.positions = {0, 0, 0, 1, 0, 0, 2, 0, 0, 0, 1, 0, 1, 1, 0, 2, 1, 0};
+  m.indices = {0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 4};
+  return m;
+}
+
+double area(const Mesh& m) { return meshcvt::mesh_info(m, meshcvt::build_topology(m)).total_area; }
+
+// Normal (unnormalized) of face f, in double.
+void normal(const Mesh& m, size_t f, double n[3]) {
+  const float* a = &m.positions[3 * m.indices[3 * f]];
+  const float* b = &m.positions[3 * m.indices[3 * f + 1]];
+  const float* c = &m.positions[3 * m.indices[3 * f + 2]];
+  double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
+  double w[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
+  n[0] = u[1] * w[2] - u[2] * w[1];
+  n[1] = u[2] * w[0] - u[0] * w[2];
+  n[2] = u[0] * w[1] - u[1] * w[0];
+}
+
+}  // namespace
+
+TEST_CASE("subdivide: closed mesh stays closed, keeps chi and area, faces x 4^k") {
+  Mesh m = octahedron();
+  meshcvt::MeshInfo before = meshcvt::mesh_info(m, meshcvt::build_topology(m));
+  for (unsigned k = 1; k <= 3; ++k) {
+    Mesh s = meshcvt::subdivide_midpoint(m, k);
+    meshcvt::MeshInfo info = meshcvt::mesh_info(s, meshcvt::build_topology(s));
+    CHECK(info.faces == m.face_count() << (2 * k));
+    CHECK(info.boundary_edges == 0);
+    CHECK(info.nonmanifold_edges == 0);
+    CHECK(info.nonmanifold_vertices == 0);
+    CHECK(info.orientation_flips == 0);
+    CHECK(info.components == 1);
+    CHECK(info.euler_characteristic == before.euler_characteristic);
+    CHECK(info.genus == 0);
+    // One new vertex per edge: V' = V + E.
+    if (k == 1) CHECK(info.vertices == before.vertices + before.edges);
+    CHECK(info.total_area == doctest::Approx(before.total_area).epsilon(1e-6));
+  }
+}
+
+TEST_CASE("subdivide: open mesh keeps one boundary loop, boundary edges double") {
+  Mesh m = strip();
+  Mesh s = meshcvt::subdivide_midpoint(m, 2);
+  meshcvt::Topology t = meshcvt::build_topology(s);
+  CHECK(s.face_count() == 4 * 16);
+  CHECK(t.boundary_edges == 6 * 4);
+  CHECK(t.boundary_loops == 1);
+  CHECK(meshcvt::mesh_info(s, t).genus == 0);
+  CHECK(area(s) == doctest::Approx(2.0));
+}
+
+TEST_CASE("subdivide: children of face f are 4f..4f+3, oriented like f, at the midpoints") {
+  Mesh m = octahedron();
+  Mesh s = meshcvt::subdivide_midpoint(m, 1);
+  REQUIRE(s.face_count() == 4 * m.face_count());
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    const uint32_t* p = &m.indices[3 * f];
+    const uint32_t* c = &s.indices[12 * f];
+    // Original vertices keep their ids and sit in the corner children.
+    CHECK(c[0] == p[0]);
+    CHECK(c[4] == p[1]);
+    CHECK(c[8] == p[2]);
+    // The middle child's corners are the midpoints of ab, bc, ca.
+    for (int e = 0; e < 3; ++e) {
+      uint32_t mid = c[9 + e], a = p[e], b = p[(e + 1) % 3];
+      for (int x = 0; x < 3; ++x)
+        CHECK(s.positions[3 * mid + x] == 0.5f * m.positions[3 * a + x] + 0.5f * m.positions[3 * b + x]);
+    }
+    double n0[3];
+    normal(m, f, n0);
+    for (size_t child = 4 * f; child < 4 * f + 4; ++child) {
+      double n1[3];
+      normal(s, child, n1);
+      CHECK(n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] > 0);
+      CHECK(s.source_polygon[child] == f);
+    }
+  }
+}
+
+TEST_CASE("subdivide: source_polygon follows the input's, over several levels") {
+  Mesh m = strip();
+  m.source_polygon = {7, 7, 9, 9};  // two quads, each cut in two triangles
+  Mesh s = meshcvt::subdivide_midpoint(m, 3);
+  REQUIRE(s.source_polygon.size() == s.face_count());
+  for (size_t i = 0; i < s.face_count(); ++i) CHECK(s.source_polygon[i] == m.source_polygon[i / 64]);
+}
+
+TEST_CASE("subdivide: level 0 is a copy, bad input and oversize results throw") {
+  Mesh m = octahedron();
+  Mesh s = meshcvt::subdivide_midpoint(m, 0);
+  CHECK(s.indices == m.indices);
+  CHECK(s.positions == m.positions);
+  CHECK_THROWS_AS(meshcvt::subdivide_midpoint(m, 15), meshcvt::OptionError);  // 8 * 4^15 > 1.4e9
+  Mesh bad = m;
+  bad.indices[0] = 99;
+  CHECK_THROWS_AS(meshcvt::subdivide_midpoint(bad, 1), meshcvt::OptionError);
+}
+
+TEST_CASE("subdivide: non-manifold edge and collapsed face survive") {
+  Mesh m;
+  m.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1};
+  m.indices = {0, 1, 2, 1, 0, 3, 0, 1, 4, 2, 2, 4};  // a fin on edge {0,1}, and a collapsed face
+  Mesh s = meshcvt::subdivide_midpoint(m, 1);
+  meshcvt::Topology t = meshcvt::build_topology(s);
+  CHECK(s.face_count() == 16);
+  CHECK(t.nonmanifold_edges == 2);  // the fin edge, split in two halves
+  // The collapsed face's (2, 2) edge has no midpoint of its own: no new vertex at vertex 2.
+  uint64_t at_vertex2 = 0;
+  for (size_t v = 5; v < s.vertex_count(); ++v)
+    at_vertex2 += s.positions[3 * v] == 0 && s.positions[3 * v + 1] == 1 && s.positions[3 * v + 2] == 0;
+  CHECK(at_vertex2 == 0);
+}
+
+TEST_CASE("subdivide: large enough for the threaded path, same as the sum of its parts") {
+  // The last level, from 131072 faces, runs on two threads; check the result against invariants.
+  Mesh m = octahedron();
+  Mesh s = meshcvt::subdivide_midpoint(m, 8);
+  meshcvt::MeshInfo info = meshcvt::mesh_info(s, meshcvt::build_topology(s));
+  CHECK(info.faces == 8u << 16);
+  CHECK(info.vertices == 2 + info.faces / 2);  // closed genus 0: V = F / 2 + 2
+  CHECK(info.boundary_edges == 0);
+  CHECK(info.orientation_flips == 0);
+  CHECK(info.duplicate_faces == 0);
+  CHECK(info.genus == 0);
+}
+
+TEST_CASE("subdivision_levels_for: smallest k with faces * 4^k >= clusters * min") {
+  CHECK(meshcvt::subdivision_levels_for(1000, 100, 10) == 0);
+  CHECK(meshcvt::subdivision_levels_for(999, 100, 10) == 1);
+  CHECK(meshcvt::subdivision_levels_for(250, 100, 10) == 1);   // 1000 >= 1000 exactly
+  CHECK(meshcvt::subdivision_levels_for(249, 100, 10) == 2);
+  CHECK(meshcvt::subdivision_levels_for(100, 100, 10) == 2);   // 400 < 1000 <= 1600
+  CHECK(meshcvt::subdivision_levels_for(5558, 100000) == 4);   // 5558 * 4^3 = 356k < 1M <= 5558 * 4^4
+  CHECK(meshcvt::subdivision_levels_for(10, 3, 0) == 0);
+  CHECK(meshcvt::subdivision_levels_for(0, 0, 10) == 0);
+  CHECK_THROWS_AS(meshcvt::subdivision_levels_for(0, 5, 10), meshcvt::OptionError);
+  CHECK_THROWS_AS(meshcvt::subdivision_levels_for(10, 5, -1), meshcvt::OptionError);
+  CHECK_THROWS_AS(meshcvt::subdivision_levels_for(10, 5, NAN), meshcvt::OptionError);
+  CHECK_THROWS_AS(meshcvt::subdivision_levels_for(10, 5, INFINITY), meshcvt::OptionError);
+}
