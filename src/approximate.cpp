@@ -1,0 +1,1755 @@
+// meshcvt: anisotropic shape approximation with the L2,1 metric — Fan et al. Sections 4 and 6.2,
+// meshing after Cohen-Steiner, Alliez, Desbrun, "Variational Shape Approximation" (VSA, 2004).
+// API and overview in meshcvt/approximate.h.
+//
+// Partition (approximate_shape):
+//  * fixed count: cluster() with Metric::l21 (hierarchical init with the normal-based cost of 5.1,
+//    boundary testing of Section 4, repair of 5.3) on the requested device, then VSA's proxy
+//    teleportation on the CPU engine (PartitionRefiner: merge the adjacent pair that costs least,
+//    split the region of highest distortion, iterate; kept when the distortion dropped, repeated
+//    until two teleports in a row gain little) — a greedy initialization can leave two proxies on
+//    one plane while another straddles a sharp edge, a local minimum boundary testing cannot leave;
+//  * error-driven (max_error): cluster() with a few proxies, then rounds that each split the regions
+//    of highest distortion (restore_cluster_count of the engine: two connected halves grown from
+//    far-apart faces) and iterate again (boundary testing + repair, as cluster() does), teleporting
+//    after each, until E / A <= max_error. A round adds k = ceil(0.75 n (ratio - 1)) proxies
+//    (ratio = (E/A) / max_error), at least 1 and at most n: about what E ~ 1/n predicts is still
+//    missing, damped so the count is not overshot by much, and at most doubling. Every round adds
+//    at least one proxy and the count is capped at the face count, where E = 0: the loop ends.
+//
+// Meshing (mesh_partition), everything on flat arrays:
+//  1. Disks. Each region is regrown from its lowest face as a shelling: a face joins when it meets
+//     the grown part in one or two of its edges (one edge: its third vertex must be new), which
+//     keeps the grown part a topological disk. Faces left over (an annulus, a handle, a whole
+//     closed component, a region pinched at a vertex) form new regions, regrown the same way.
+//     Every region is then a disk with one border loop.
+//  2. Border loops. The border of each region is walked once (around each vertex through the
+//     region's faces), as a cycle of steps (vertex, region across).
+//  3. Anchors. A vertex is a corner anchor when it has faces of three or more regions, or of two on
+//     the mesh boundary (non-manifold edges count as boundary). Chords are the pieces of a loop
+//     between consecutive anchors; each is processed once, from its "owner" side (the lower region,
+//     or the region when the other side is the boundary), so both sides agree. Chord subdivision
+//     splits a chord at its farthest vertex from the segment between its anchors while the chord
+//     rule says so (ChordRule). Fixes, repeated until nothing changes: a loop with no anchor gets
+//     3 evenly spaced by arc length, a loop with one anchor (a closed chord) is split at the vertex
+//     farthest from it, two chords joining the same pair of anchors get all but the straightest
+//     split (the pair would be an output edge of four triangles), a region with fewer than 3
+//     anchors gets one on its most curved chord.
+//  4. Positions: the mean of the vertex's projections onto the proxy planes (X_i, N_i) of its
+//     regions, rounded to float (every later test is made on the coordinates written out).
+//  5. Triangulation, the paper's multi-source Dijkstra coloring: border vertices take the color of
+//     the chord end closest along the chord; interior vertices the color of the closest border
+//     vertex by Dijkstra distance (seeded with the border vertices' own distances to their anchor,
+//     so the colored cells are geodesic Voronoi cells of the anchors with the border pinned). Each
+//     input triangle with three colors gives an output triangle. A region's triangles are accepted
+//     when they are exactly a triangulation of its anchor polygon (m - 2 triangles, every polygon
+//     edge once in border order, every diagonal twice in opposite directions), none faces away from
+//     the proxy normal or is a sliver, and no diagonal is an edge of another region. Otherwise the
+//     polygon is triangulated directly (interval dynamic programming: fewest bad triangles, then
+//     the largest smallest angle).
+//  6. A region whose polygon still has no acceptable triangulation is fixed and the round redone
+//     (at most kMaxMeshingRounds rounds; only regions whose border changed are colored again):
+//     chords that cross in the proxy plane are split at their farthest vertex (no unflipped
+//     triangulation exists while they cross); else the region's anchors are put at their mesh
+//     vertices (averaged projections can fold a thin region); else its most deviating chord is
+//     split, a few times. A region left with flipped triangles after that is too curved for one
+//     polygon: it is split in two by its normals and the whole meshing done again (at most
+//     kMaxSplitPasses passes); what remains is reported.
+//
+// Why this gives a closed manifold for closed manifold input: every region is a disk with one
+// polygon, every chord edge is shared by exactly the two polygons on its sides (in opposite
+// directions), no two chords join the same anchors, and diagonals are never shared, so every output
+// edge has two triangles; around an anchor the regions are disks meeting once each.
+#include <algorithm>
+#include <cassert>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <queue>
+#include <string>
+#include <unordered_set>
+#include <vector>
+
+#include "cluster_engine.h"
+#include "meshcvt/approximate.h"
+#include "meshcvt/error.h"
+#include "parallel.h"
+
+namespace meshcvt {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Meshing rounds (redone after anchors were added for flipped polygons) before accepting the rest.
+constexpr uint32_t kMaxMeshingRounds = 32;
+// A region whose polygon is simple in its proxy plane but still has no unflipped triangulation gets
+// anchors on its most deviating chord only while it has fewer flip anchors than this: beyond, it is
+// too curved for one polygon and is split instead (split_curved).
+constexpr uint32_t kMaxDeviationAnchors = 4;
+// Passes of the anchor fixes; each pass that changes something adds anchors, so this only bounds
+// pathological input (non-manifold borders).
+constexpr uint32_t kMaxAnchorPasses = 64;
+// Larger polygons are not triangulated by dynamic programming (O(m^3) time, O(m^2) memory).
+constexpr uint32_t kMaxDynamicProgramming = 1024;
+// A triangle faces along its proxy normal when the cosine between them is above this.
+constexpr double kMinFacingCosine = 1e-6;
+// Triangles whose smallest angle has a smaller sine are slivers (collinear anchors): never chosen.
+constexpr double kMinSine = 1e-6;
+// Same as cluster(): repair rounds and stall detection of the boundary iteration.
+constexpr uint32_t kMaxRepairRounds = 8;
+constexpr uint32_t kStallLimit = 16;
+// Teleport attempts after a clustering (each costs a boundary iteration to convergence); the loop
+// stops earlier at the first attempt that does not lower the distortion.
+constexpr uint32_t kMaxTeleports = 32;
+// Teleporting stops after two teleports in a row lower the distortion by less than this fraction:
+// on CAD parts teleports remove whole misplaced proxies (fandisk: E / A 0.041 -> 0.016, gains of
+// 5-90% between some of 1%), on smooth shapes they gain about 1% each for the cost of a boundary
+// iteration to convergence.
+constexpr double kTeleportMinGain = 0.02;
+// Meshing passes that split regions still giving flipped triangles (MeshingFix::split_curved).
+constexpr uint32_t kMaxSplitPasses = 4;
+
+// ---- small vector helpers (double)
+
+struct V3 {
+  double x = 0, y = 0, z = 0;
+};
+V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+V3 operator*(double s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
+double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+V3 cross(V3 a, V3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+double length(V3 a) { return std::sqrt(dot(a, a)); }
+
+V3 vertex_position(const Mesh& mesh, uint32_t v) {
+  const float* p = &mesh.positions[3 * size_t(v)];
+  return {p[0], p[1], p[2]};
+}
+
+// Distance from p to the segment ab (to a when a = b).
+double segment_distance(V3 p, V3 a, V3 b) {
+  V3 ab = b - a, ap = p - a;
+  double len2 = dot(ab, ab);
+  double t = len2 > 0 ? std::clamp(dot(ap, ab) / len2, 0.0, 1.0) : 0.0;
+  return length(ap - t * ab);
+}
+
+// Sine of the smallest angle of triangle abc (0 when degenerate); the max-min-angle quality.
+double min_angle_sine(V3 a, V3 b, V3 c) {
+  double area2 = length(cross(b - a, c - a));
+  double la = length(b - c), lb = length(c - a), lc = length(a - b);
+  // sin(angle at a) = area2 / (lb lc), etc.; the smallest is at the corner opposite the shortest edge
+  double m = std::max({la * lb, lb * lc, lc * la});
+  return m > 0 ? area2 / m : 0.0;
+}
+
+// Triangle abc faces along n (or n is zero: a region without area has no direction to face) and is
+// not a sliver: its smallest angle's sine is above kMinSine, so it stays a proper triangle in float.
+bool faces_along(V3 a, V3 b, V3 c, V3 n) {
+  V3 cr = cross(b - a, c - a);
+  double len = length(cr);
+  if (!(min_angle_sine(a, b, c) > kMinSine)) return false;
+  if (dot(n, n) == 0) return true;
+  return dot(cr, n) > kMinFacingCosine * len;
+}
+
+// What the output will hold: positions rounded to float, so every test is made on those.
+V3 rounded(V3 p) { return {double(float(p.x)), double(float(p.y)), double(float(p.z))}; }
+
+uint64_t edge_key(uint32_t a, uint32_t b) {
+  if (a > b) std::swap(a, b);
+  return (uint64_t(a) << 32) | b;
+}
+
+// ---- per-face geometry and proxies
+
+struct FaceGeometry {
+  std::vector<V3> normal;    // unit normal, (0,0,0) for a face without area
+  std::vector<double> area;  // input units squared
+  std::vector<V3> centroid;
+  std::vector<uint8_t> collapsed;  // a repeated corner: no edges (see Topology), ignored by meshing
+};
+
+FaceGeometry face_geometry(const Mesh& mesh) {
+  size_t nf = mesh.face_count();
+  FaceGeometry g;
+  g.normal.resize(nf);
+  g.area.resize(nf);
+  g.centroid.resize(nf);
+  g.collapsed.resize(nf);
+  for (size_t f = 0; f < nf; ++f) {
+    uint32_t i0 = mesh.indices[3 * f], i1 = mesh.indices[3 * f + 1], i2 = mesh.indices[3 * f + 2];
+    V3 a = vertex_position(mesh, i0), b = vertex_position(mesh, i1), c = vertex_position(mesh, i2);
+    V3 n = cross(b - a, c - a);
+    double len = length(n);
+    g.area[f] = 0.5 * len;
+    g.normal[f] = len > 0 ? (1.0 / len) * n : V3{};
+    g.centroid[f] = (1.0 / 3.0) * (a + b + c);
+    g.collapsed[f] = i0 == i1 || i1 == i2 || i2 == i0;
+  }
+  return g;
+}
+
+struct Proxies {
+  std::vector<V3> normal;    // unit N_i, (0,0,0) for a region without area
+  std::vector<V3> centroid;  // X_i
+  std::vector<double> area;
+};
+
+Proxies compute_proxies(const FaceGeometry& g, const std::vector<uint32_t>& labels, uint32_t regions) {
+  Proxies p;
+  p.normal.assign(regions, V3{});
+  p.centroid.assign(regions, V3{});
+  p.area.assign(regions, 0.0);
+  std::vector<V3> plain(regions);  // unweighted centroid sums, for regions without area
+  std::vector<uint32_t> count(regions, 0);
+  for (size_t f = 0; f < labels.size(); ++f) {
+    uint32_t r = labels[f];
+    double a = g.area[f];
+    p.normal[r] = p.normal[r] + a * g.normal[f];
+    p.centroid[r] = p.centroid[r] + a * g.centroid[f];
+    p.area[r] += a;
+    plain[r] = plain[r] + g.centroid[f];
+    ++count[r];
+  }
+  for (uint32_t r = 0; r < regions; ++r) {
+    double len = length(p.normal[r]);
+    p.normal[r] = len > 0 ? (1.0 / len) * p.normal[r] : V3{};
+    if (p.area[r] > 0)
+      p.centroid[r] = (1.0 / p.area[r]) * p.centroid[r];
+    else if (count[r] > 0)
+      p.centroid[r] = (1.0 / count[r]) * plain[r];
+  }
+  return p;
+}
+
+double partition_distortion(const FaceGeometry& g, const std::vector<uint32_t>& labels, const Proxies& p) {
+  double e = 0;
+  for (size_t f = 0; f < labels.size(); ++f) {
+    V3 d = g.normal[f] - p.normal[labels[f]];
+    e += g.area[f] * dot(d, d);
+  }
+  return e;
+}
+
+void check_labels(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t regions) {
+  if (labels.size() != mesh.face_count())
+    throw OptionError(std::to_string(labels.size()) + " region labels for " + std::to_string(mesh.face_count()) +
+                      " faces");
+  for (size_t f = 0; f < labels.size(); ++f)
+    if (labels[f] >= regions)
+      throw OptionError("face " + std::to_string(f) + " has region " + std::to_string(labels[f]) + " of " +
+                        std::to_string(regions));
+}
+
+void check_meshing_options(const MeshingOptions& o) {
+  if (!(o.chord_error >= 0) || !std::isfinite(o.chord_error))
+    throw OptionError("chord error must be a finite number >= 0 (got " + std::to_string(o.chord_error) + ")");
+}
+
+// ---- 1. every region a topological disk
+
+// Regrows every region as a shelling (see the file comment) and gives the faces left over new
+// region ids. Returns the new region count; appends split_region fixes.
+uint32_t make_disk_regions(const Mesh& mesh, const Topology& topology, const FaceGeometry& g,
+                           std::vector<uint32_t>& labels, uint32_t regions, std::vector<MeshingFix>& fixes) {
+  const uint32_t nf = uint32_t(labels.size());
+  std::vector<uint32_t> vertex_stamp(mesh.vertex_count(), 0), face_stamp(nf, 0);
+  uint32_t stamp = 0;
+  std::vector<uint32_t> queue, pending_regions, leftover;
+
+  // Lowest face of every region (collapsed faces take part in nothing).
+  std::vector<uint32_t> first_face(regions, kNone);
+  for (uint32_t f = nf; f-- > 0;)
+    if (!g.collapsed[f]) first_face[labels[f]] = f;
+
+  auto grow = [&](uint32_t region, uint32_t seed) {
+    ++stamp;
+    queue.assign(1, seed);
+    for (size_t head = 0; head < queue.size(); ++head) {
+      uint32_t f = queue[head];
+      if (face_stamp[f] == stamp) continue;
+      const uint32_t* adj = &topology.face_adjacent[3 * size_t(f)];
+      int shared = 0, shared_edge = 0;
+      for (int e = 0; e < 3; ++e)
+        if (adj[e] != kNone && face_stamp[adj[e]] == stamp) ++shared, shared_edge = e;
+      if (f != seed) {
+        if (shared == 0 || shared == 3) continue;
+        // One shared edge: the opposite corner must be new, or the part would touch itself there.
+        if (shared == 1 && vertex_stamp[mesh.indices[3 * size_t(f) + (shared_edge + 2) % 3]] == stamp) continue;
+      }
+      face_stamp[f] = stamp;
+      for (int j = 0; j < 3; ++j) vertex_stamp[mesh.indices[3 * size_t(f) + j]] = stamp;
+      for (int e = 0; e < 3; ++e) {
+        uint32_t o = adj[e];
+        if (o != kNone && labels[o] == region && face_stamp[o] != stamp && !g.collapsed[o]) queue.push_back(o);
+      }
+    }
+    return stamp;
+  };
+
+  // Faces of a region (after a split, of the region being regrown) not reached by the growth.
+  std::vector<uint32_t> region_faces;
+  std::vector<uint32_t> face_offsets(size_t(regions) + 1, 0);
+  for (uint32_t f = 0; f < nf; ++f) ++face_offsets[labels[f] + 1];
+  for (uint32_t r = 0; r < regions; ++r) face_offsets[r + 1] += face_offsets[r];
+  region_faces.resize(nf);
+  {
+    std::vector<uint32_t> fill(face_offsets.begin(), face_offsets.end() - 1);
+    for (uint32_t f = 0; f < nf; ++f) region_faces[fill[labels[f]]++] = f;
+  }
+
+  uint32_t count = regions;
+  std::vector<uint32_t> members, component_queue;
+  for (uint32_t r = 0; r < regions; ++r) {
+    if (first_face[r] == kNone) continue;
+    // Work list of (region id, its faces): the region itself, then the pieces split off it.
+    members.assign(region_faces.begin() + face_offsets[r], region_faces.begin() + face_offsets[r + 1]);
+    std::vector<std::pair<uint32_t, std::vector<uint32_t>>> work;
+    work.emplace_back(r, std::move(members));
+    for (size_t w = 0; w < work.size(); ++w) {
+      uint32_t id = work[w].first;
+      std::vector<uint32_t> faces = std::move(work[w].second);
+      uint32_t seed = kNone;
+      for (uint32_t f : faces)
+        if (!g.collapsed[f]) { seed = f; break; }
+      if (seed == kNone) continue;
+      uint32_t grown = grow(id, seed);
+      // Left over: connected pieces (through faces of this region id) become new regions.
+      uint32_t pieces = 0;
+      for (uint32_t f : faces) {
+        if (face_stamp[f] == grown || g.collapsed[f] || labels[f] != id) continue;
+        uint32_t fresh = count++;
+        ++pieces;
+        std::vector<uint32_t> piece;
+        component_queue.assign(1, f);
+        labels[f] = fresh;
+        for (size_t head = 0; head < component_queue.size(); ++head) {
+          uint32_t x = component_queue[head];
+          piece.push_back(x);
+          for (int e = 0; e < 3; ++e) {
+            uint32_t o = topology.face_adjacent[3 * size_t(x) + e];
+            if (o != kNone && labels[o] == id && face_stamp[o] != grown && !g.collapsed[o]) {
+              labels[o] = fresh;
+              component_queue.push_back(o);
+            }
+          }
+        }
+        std::sort(piece.begin(), piece.end());
+        work.emplace_back(fresh, std::move(piece));
+      }
+      if (pieces > 0) fixes.push_back({MeshingFix::split_region, id, kNone, kNone, pieces});
+    }
+  }
+  return count;
+}
+
+// ---- 2-5. the mesher
+
+struct Chord {
+  uint32_t loop = 0;
+  uint32_t begin = 0;  // step of the loop at its first anchor
+  uint32_t steps = 0;  // edges; the last vertex is the anchor at step begin + steps (mod loop size)
+};
+
+class Mesher {
+ public:
+  Mesher(const Mesh& mesh, const Topology& topology, const FaceGeometry& geom, const std::vector<uint32_t>& labels,
+         uint32_t regions, const Proxies& proxies, const MeshingOptions& options, ShapeApproximation& out)
+      : mesh_(mesh), topology_(topology), geom_(geom), labels_(labels), regions_(regions), proxies_(proxies),
+        options_(options), out_(out), nv_(uint32_t(mesh.vertex_count())), nf_(uint32_t(mesh.face_count())) {}
+
+  void run();
+
+ private:
+  enum AnchorKind : uint8_t { kNoAnchor = 0, kCorner, kChordAnchor, kFixAnchor };
+
+  bool is_border(uint32_t half_edge) const {
+    uint32_t o = topology_.face_adjacent[half_edge];
+    return o == kNone || labels_[o] != labels_[half_edge / 3];
+  }
+  uint32_t across(uint32_t half_edge) const {
+    uint32_t o = topology_.face_adjacent[half_edge];
+    return o == kNone ? kNone : labels_[o];
+  }
+  V3 position(uint32_t v) const { return vertex_position(mesh_, v); }
+
+  void find_open_vertices();
+  void extract_loops();
+  bool walk_loop(uint32_t start, std::vector<uint8_t>& visited);
+  void mark_corner_anchors();
+
+  uint32_t loop_size(uint32_t l) const { return loop_offsets_[l + 1] - loop_offsets_[l]; }
+  uint32_t chord_vertex(const Chord& c, uint32_t i) const {
+    return loop_vertex_[loop_offsets_[c.loop] + (c.begin + i) % loop_size(c.loop)];
+  }
+  uint32_t chord_region(const Chord& c) const { return loop_region_[c.loop]; }
+  uint32_t chord_neighbor(const Chord& c) const { return loop_neighbor_[loop_offsets_[c.loop] + c.begin]; }
+  // The side that decides for a chord: both sides must see the same anchors and colors.
+  bool owns(uint32_t region, uint32_t neighbor) const {
+    return region_ok_[region] && (neighbor == kNone || !region_ok_[neighbor] || region < neighbor);
+  }
+  void loop_chords(uint32_t l, std::vector<Chord>& chords) const;
+  // Vertex of the chord's interior farthest from the segment of its ends (i in (lo, hi)), and its
+  // distance; kNone when there is no interior vertex.
+  uint32_t farthest(const Chord& c, uint32_t lo, uint32_t hi, double& distance) const;
+  double chord_deviation(const Chord& c, uint32_t& split_at) const;  // d / |ab|, inf when closed
+  uint32_t subdivide(const Chord& c);
+  bool settle_anchors();
+  void add_anchor(uint32_t v, AnchorKind kind);
+
+  bool triangulate(bool last_round);
+  void index_regions();
+  void recolor();
+  std::vector<uint32_t> crossing_splits(uint32_t region, const std::vector<uint32_t>& polygon) const;
+  uint32_t deviation_split(uint32_t region) const;
+  bool valid_coloring(uint32_t region, const std::vector<uint32_t>& polygon, std::vector<uint32_t>& tris) const;
+  uint32_t triangulate_polygon(uint32_t region, const std::vector<uint32_t>& polygon, std::vector<uint32_t>& tris) const;
+  bool diagonal_free(uint32_t a, uint32_t b) const { return !edges_.count(edge_key(a, b)); }
+  void finish();
+
+  const Mesh& mesh_;
+  const Topology& topology_;
+  const FaceGeometry& geom_;
+  const std::vector<uint32_t>& labels_;
+  const uint32_t regions_;
+  const Proxies& proxies_;
+  const MeshingOptions& options_;
+  ShapeApproximation& out_;
+  const uint32_t nv_, nf_;
+  double mean_edge_ = 0;
+
+  std::vector<uint8_t> open_;       // per vertex: on a boundary or non-manifold edge
+  std::vector<uint8_t> region_ok_;  // per region: one traceable border loop
+  // Border loops, CSR: step i of loop l goes from loop_vertex_[i] to the next step's vertex, with
+  // region loop_neighbor_[i] (kNone: boundary) across.
+  std::vector<uint32_t> loop_offsets_{0}, loop_vertex_, loop_neighbor_, loop_region_;
+  std::vector<uint32_t> region_loop_;  // loop of each region, kNone when it has none or several
+  std::vector<uint8_t> anchor_;        // AnchorKind per vertex
+  std::vector<uint8_t> at_vertex_;     // per vertex: anchor placed at the vertex (anchor_position fix)
+  std::vector<uint32_t> flip_anchors_; // per region: flip_anchor fixes so far
+  std::vector<uint8_t> reverted_;      // per region: anchor_position fix applied
+  std::vector<uint8_t> fell_back_;     // per region: its coloring failed once; triangulated directly since
+
+  // Coloring, redone only for regions whose border changed (`dirty_`: an anchor was added on it).
+  std::vector<uint8_t> dirty_;
+  std::vector<uint8_t> unsettled_;  // per region: got an anchor since settle_anchors last looked at it
+  std::vector<uint32_t> region_face_offsets_, region_faces_;          // non-collapsed faces, CSR
+  std::vector<uint32_t> region_interior_offsets_, region_interior_;   // vertices on no border, CSR
+  std::vector<uint8_t> on_border_;                                    // per vertex: on some loop
+  std::vector<uint32_t> interior_region_;  // per vertex: its region when on no border, else kNone
+  // Edges into interior vertices (the only ones the Dijkstra relaxes), CSR per vertex, with lengths.
+  std::vector<uint32_t> edge_offsets_, edge_target_;
+  std::vector<double> edge_length_;
+  std::vector<std::vector<uint32_t>> candidates_;  // per region: the coloring's triangles (input vertex ids)
+  // Per region: the last direct triangulation and what it was made from, reused while they match.
+  struct CachedTriangulation {
+    std::vector<uint32_t> polygon, tris;
+    std::vector<V3> positions;
+    uint32_t cost = 0;
+  };
+  std::vector<CachedTriangulation> cache_;
+
+  // Output of a meshing round.
+  std::vector<uint32_t> out_id_;                // per vertex: output vertex of an anchor, else kNone
+  std::vector<uint32_t> anchors_;               // output vertex -> input vertex
+  std::vector<V3> anchor_position_;
+  std::vector<uint32_t> polygon_offsets_, polygon_vertices_;  // output vertex ids
+  std::unordered_set<uint64_t> edges_;          // chord edges and accepted diagonals
+  std::vector<uint32_t> color_;                 // per vertex: input vertex of its anchor (kNone: none yet)
+  std::vector<double> distance_;
+  std::vector<uint32_t> triangles_, triangle_regions_;
+};
+
+void Mesher::find_open_vertices() {
+  open_.assign(nv_, 0);
+  double total = 0;
+  uint64_t edges = 0;
+  for (uint32_t f = 0; f < nf_; ++f) {
+    if (geom_.collapsed[f]) continue;
+    for (int e = 0; e < 3; ++e) {
+      uint32_t a = mesh_.indices[3 * size_t(f) + e], b = mesh_.indices[3 * size_t(f) + (e + 1) % 3];
+      total += length(position(a) - position(b));
+      ++edges;
+      if (topology_.face_adjacent[3 * size_t(f) + e] == kNone) open_[a] = open_[b] = 1;
+    }
+  }
+  mean_edge_ = edges ? total / double(edges) : 0.0;
+}
+
+// Walks the border loop that starts with half-edge `start` (a border half-edge of a non-collapsed
+// face), appending its steps. Returns false (and appends nothing) when the walk does not close,
+// which only a non-manifold configuration can cause.
+bool Mesher::walk_loop(uint32_t start, std::vector<uint8_t>& visited) {
+  const size_t first = loop_vertex_.size();
+  uint32_t face = start / 3, edge = start % 3;
+  // Each step goes along `edge` of `face` from `from` to `to`; the first one in the face's order.
+  uint32_t from = mesh_.indices[start], to = mesh_.indices[3 * size_t(face) + (edge + 1) % 3];
+  for (uint64_t guard = 3 * uint64_t(nf_) + 3; guard > 0; --guard) {
+    const uint32_t h = 3 * face + edge;
+    visited[h] = 1;
+    loop_vertex_.push_back(from);
+    loop_neighbor_.push_back(across(h));
+    // Rotate around `to` through faces of the region (across non-border edges) to the next border
+    // edge. A disk region's faces around `to` form one fan, so this is its other end.
+    uint32_t g = face, came = edge;
+    const uint32_t valence = topology_.vertex_face_offsets[to + 1] - topology_.vertex_face_offsets[to];
+    bool found = false;
+    for (uint32_t turn = 0; turn <= valence && !found; ++turn) {
+      int corner = -1;
+      for (int j = 0; j < 3; ++j)
+        if (mesh_.indices[3 * size_t(g) + j] == to) corner = j;
+      if (corner < 0) break;
+      // The two edges of g at `to`: `corner` (to -> next corner) and corner + 2 (previous -> to).
+      const uint32_t e1 = uint32_t(corner), e2 = uint32_t(corner + 2) % 3;
+      const uint32_t other = came == e1 ? e2 : e1;
+      if (is_border(3 * g + other)) {
+        face = g, edge = other, found = true;
+        break;
+      }
+      const uint32_t x = mesh_.indices[3 * size_t(g) + (other == e1 ? (corner + 1) % 3 : (corner + 2) % 3)];
+      const uint32_t next = topology_.face_adjacent[3 * size_t(g) + other];
+      int arrive = -1;
+      for (int j = 0; j < 3; ++j) {
+        uint32_t p = mesh_.indices[3 * size_t(next) + j], q = mesh_.indices[3 * size_t(next) + (j + 1) % 3];
+        if ((p == to && q == x) || (p == x && q == to)) arrive = j;
+      }
+      if (arrive < 0) break;
+      g = next, came = uint32_t(arrive);
+    }
+    if (!found) break;
+    if (3 * face + edge == start) return true;
+    if (visited[3 * face + edge]) break;  // ran into another loop: not a manifold border
+    const uint32_t p = mesh_.indices[3 * size_t(face) + edge], q = mesh_.indices[3 * size_t(face) + (edge + 1) % 3];
+    if (p != to && q != to) break;
+    from = to;
+    to = p == to ? q : p;
+  }
+  loop_vertex_.resize(first);
+  loop_neighbor_.resize(first);
+  return false;
+}
+
+void Mesher::extract_loops() {
+  std::vector<uint8_t> visited(3 * size_t(nf_), 0);
+  std::vector<uint32_t> loops_of_region(regions_, 0);
+  std::vector<uint8_t> broken(regions_, 0), has_faces(regions_, 0);
+  region_loop_.assign(regions_, kNone);
+  for (uint32_t f = 0; f < nf_; ++f) {
+    uint32_t r = labels_[f];
+    has_faces[r] = 1;
+    if (geom_.collapsed[f]) continue;
+    for (uint32_t e = 0; e < 3; ++e) {
+      uint32_t h = 3 * f + e;
+      if (visited[h] || !is_border(h)) continue;
+      if (!walk_loop(h, visited)) {
+        broken[r] = 1;
+        continue;
+      }
+      uint32_t l = uint32_t(loop_region_.size());
+      loop_region_.push_back(r);
+      loop_offsets_.push_back(uint32_t(loop_vertex_.size()));
+      if (loops_of_region[r]++ == 0) region_loop_[r] = l;
+    }
+  }
+  region_ok_.assign(regions_, 0);
+  for (uint32_t r = 0; r < regions_; ++r) {
+    region_ok_[r] = has_faces[r] && !broken[r] && loops_of_region[r] == 1 && loop_size(region_loop_[r]) >= 3;
+    if (!region_ok_[r]) {
+      region_loop_[r] = kNone;
+      if (has_faces[r]) out_.fixes.push_back({MeshingFix::skipped_region, r, kNone, kNone, 0});
+    }
+  }
+}
+
+void Mesher::mark_corner_anchors() {
+  anchor_.assign(nv_, kNoAnchor);
+  for (uint32_t v = 0; v < nv_; ++v) {
+    uint32_t seen[3] = {kNone, kNone, kNone}, distinct = 0;
+    for (uint32_t i = topology_.vertex_face_offsets[v]; i < topology_.vertex_face_offsets[v + 1] && distinct < 3; ++i) {
+      uint32_t f = topology_.vertex_faces[i];
+      if (geom_.collapsed[f]) continue;
+      uint32_t r = labels_[f];
+      if (r != seen[0] && r != seen[1] && r != seen[2]) seen[distinct++] = r;
+    }
+    if (distinct >= 3 || (distinct == 2 && open_[v])) anchor_[v] = kCorner;
+  }
+  // Where the region across changes along a loop (only non-manifold borders add anything here).
+  for (uint32_t l = 0; l + 1 < loop_offsets_.size(); ++l) {
+    uint32_t off = loop_offsets_[l], m = loop_size(l);
+    for (uint32_t i = 0; i < m; ++i)
+      if (loop_neighbor_[off + (i + m - 1) % m] != loop_neighbor_[off + i] && !anchor_[loop_vertex_[off + i]])
+        anchor_[loop_vertex_[off + i]] = kCorner;
+  }
+  for (uint32_t v = 0; v < nv_; ++v) out_.stats.corner_anchors += anchor_[v] == kCorner;
+}
+
+void Mesher::add_anchor(uint32_t v, AnchorKind kind) {
+  assert(anchor_[v] == kNoAnchor);
+  anchor_[v] = kind;
+  color_[v] = v;
+  distance_[v] = 0;
+  // The chords through v changed: every region around v needs its anchors settled and its coloring
+  // done again.
+  for (uint32_t i = topology_.vertex_face_offsets[v]; i < topology_.vertex_face_offsets[v + 1]; ++i)
+    dirty_[labels_[topology_.vertex_faces[i]]] = unsettled_[labels_[topology_.vertex_faces[i]]] = 1;
+  if (kind == kChordAnchor)
+    ++out_.stats.chord_anchors;
+  else
+    ++out_.stats.fix_anchors;
+}
+
+void Mesher::loop_chords(uint32_t l, std::vector<Chord>& chords) const {
+  chords.clear();
+  uint32_t off = loop_offsets_[l], m = loop_size(l);
+  uint32_t first = kNone, previous = kNone;
+  for (uint32_t i = 0; i < m; ++i) {
+    if (!anchor_[loop_vertex_[off + i]]) continue;
+    if (first == kNone) first = i;
+    if (previous != kNone) chords.push_back({l, previous, i - previous});
+    previous = i;
+  }
+  if (first != kNone) chords.push_back({l, previous, (first + m - previous) % m == 0 ? m : (first + m - previous) % m});
+}
+
+uint32_t Mesher::farthest(const Chord& c, uint32_t lo, uint32_t hi, double& distance) const {
+  V3 a = position(chord_vertex(c, lo)), b = position(chord_vertex(c, hi));
+  uint32_t best = kNone;
+  distance = -1;
+  for (uint32_t i = lo + 1; i < hi; ++i) {
+    double d = segment_distance(position(chord_vertex(c, i)), a, b);
+    if (d > distance) distance = d, best = i;
+  }
+  return best;
+}
+
+double Mesher::chord_deviation(const Chord& c, uint32_t& split_at) const {
+  double d;
+  split_at = farthest(c, 0, c.steps, d);
+  if (split_at == kNone) return -1;
+  uint32_t a = chord_vertex(c, 0), b = chord_vertex(c, c.steps);
+  double ab = length(position(a) - position(b));
+  if (a == b || !(ab > 0)) return std::numeric_limits<double>::infinity();
+  return d / ab;
+}
+
+// Chord subdivision by the chord rule (a closed chord is always split once first). Returns the
+// number of anchors added.
+uint32_t Mesher::subdivide(const Chord& c) {
+  uint32_t region = chord_region(c), neighbor = chord_neighbor(c);
+  double sine = 1;
+  if (neighbor != kNone) {
+    V3 ni = proxies_.normal[region], nj = proxies_.normal[neighbor];
+    if (dot(ni, ni) > 0 && dot(nj, nj) > 0) sine = length(cross(ni, nj));
+  }
+  uint32_t added = 0;
+  std::vector<std::pair<uint32_t, uint32_t>> stack{{0, c.steps}};
+  while (!stack.empty()) {
+    auto [lo, hi] = stack.back();
+    stack.pop_back();
+    if (hi - lo < 2) continue;
+    uint32_t a = chord_vertex(c, lo), b = chord_vertex(c, hi);
+    double d;
+    uint32_t split = farthest(c, lo, hi, d);
+    if (a == b) {
+      // A closed chord (a loop with one anchor): its two halves are separate chords.
+      add_anchor(chord_vertex(c, split), kFixAnchor);
+      out_.fixes.push_back({MeshingFix::loop_anchors, region, neighbor, chord_vertex(c, split), 1});
+    } else {
+      double criterion;
+      if (options_.chord_rule == ChordRule::cgal) {
+        criterion = mean_edge_ > 0 ? d / mean_edge_ : 0;
+      } else {
+        double ab = length(position(a) - position(b));
+        criterion = d > 0 ? (ab > 0 ? d * sine / ab : std::numeric_limits<double>::infinity()) : 0;
+      }
+      if (!(criterion > options_.chord_error)) continue;
+      add_anchor(chord_vertex(c, split), kChordAnchor);
+    }
+    ++added;
+    stack.push_back({lo, split});
+    stack.push_back({split, hi});
+  }
+  return added;
+}
+
+// Anchor fixes and chord subdivision until nothing changes. Returns true when anchors were added.
+bool Mesher::settle_anchors() {
+  bool any = false;
+  std::vector<Chord> chords;
+  struct Keyed {
+    uint64_t key;
+    Chord chord;
+  };
+  std::vector<Keyed> keyed;
+  std::vector<uint8_t> todo;
+  const uint32_t loops = uint32_t(loop_region_.size());
+  for (uint32_t pass = 0; pass < kMaxAnchorPasses; ++pass) {
+    // Only regions that got an anchor since they were last looked at can need more.
+    todo.swap(unsettled_);
+    unsettled_.assign(regions_, 0);
+    bool changed = false;
+    // Loops without anchor: three, evenly spaced by arc length.
+    for (uint32_t l = 0; l < loops; ++l) {
+      uint32_t off = loop_offsets_[l], m = loop_size(l), r = loop_region_[l];
+      if (!todo[r] || !owns(r, loop_neighbor_[off])) continue;
+      bool anchored = false;
+      for (uint32_t i = 0; i < m && !anchored; ++i) anchored = anchor_[loop_vertex_[off + i]] != kNoAnchor;
+      if (anchored) continue;
+      std::vector<double> arc(m + 1, 0.0);
+      for (uint32_t i = 0; i < m; ++i)
+        arc[i + 1] = arc[i] + length(position(loop_vertex_[off + (i + 1) % m]) - position(loop_vertex_[off + i]));
+      uint32_t picks[3] = {0, 0, 0};
+      for (int k = 1; k < 3; ++k) {
+        double target = arc[m] * k / 3.0;
+        uint32_t i = uint32_t(std::lower_bound(arc.begin(), arc.end(), target) - arc.begin());
+        if (i > 0 && target - arc[i - 1] <= arc[std::min(i, m)] - target) --i;
+        picks[k] = std::clamp(i, picks[k - 1] + 1, m - 3 + uint32_t(k));
+      }
+      for (uint32_t i : picks) add_anchor(loop_vertex_[off + i], kFixAnchor);
+      out_.fixes.push_back({MeshingFix::loop_anchors, r, loop_neighbor_[off], kNone, 3});
+      changed = true;
+    }
+    // Chord subdivision (and closed chords).
+    for (uint32_t l = 0; l < loops; ++l) {
+      if (!todo[loop_region_[l]]) continue;
+      loop_chords(l, chords);
+      for (const Chord& c : chords)
+        if (owns(chord_region(c), chord_neighbor(c)) && subdivide(c) > 0) changed = true;
+    }
+    // Chords joining the same two anchors: keep the straightest, split the others. Any chord can
+    // pair with a new one, so all are listed (by their ends only; deviations for pairs alone).
+    keyed.clear();
+    for (uint32_t l = 0; l < loops; ++l) {
+      loop_chords(l, chords);
+      for (const Chord& c : chords) {
+        if (!owns(chord_region(c), chord_neighbor(c))) continue;
+        uint32_t a = chord_vertex(c, 0), b = chord_vertex(c, c.steps);
+        if (a != b) keyed.push_back({edge_key(a, b), c});
+      }
+    }
+    std::sort(keyed.begin(), keyed.end(), [](const Keyed& x, const Keyed& y) {
+      if (x.key != y.key) return x.key < y.key;
+      if (x.chord.loop != y.chord.loop) return x.chord.loop < y.chord.loop;
+      return x.chord.begin < y.chord.begin;
+    });
+    for (size_t i = 0; i < keyed.size();) {
+      size_t j = i + 1;
+      while (j < keyed.size() && keyed[j].key == keyed[i].key) ++j;
+      if (j - i >= 2) {
+        // Keep the straightest (ties: the first listed); split the others at their farthest vertex.
+        std::vector<std::pair<double, size_t>> group;
+        std::vector<uint32_t> split(j - i);
+        for (size_t k = i; k < j; ++k) group.push_back({chord_deviation(keyed[k].chord, split[k - i]), k});
+        std::stable_sort(group.begin(), group.end(), [](auto& x, auto& y) { return x.first < y.first; });
+        for (size_t g = 1; g < group.size(); ++g) {
+          const Chord& c = keyed[group[g].second].chord;
+          uint32_t at = split[group[g].second - i];
+          if (at == kNone || anchor_[chord_vertex(c, at)]) continue;
+          uint32_t v = chord_vertex(c, at);
+          add_anchor(v, kFixAnchor);
+          out_.fixes.push_back({MeshingFix::duplicate_chord, chord_region(c), chord_neighbor(c), v, 1});
+          changed = true;
+        }
+      }
+      i = j;
+    }
+    // Regions with fewer than three anchors: one more on the most curved chord.
+    for (uint32_t r = 0; r < regions_; ++r) {
+      if (!region_ok_[r] || !todo[r]) continue;
+      loop_chords(region_loop_[r], chords);
+      if (chords.size() >= 3) continue;
+      double best = -1;
+      uint32_t best_vertex = kNone;
+      for (const Chord& c : chords) {
+        uint32_t split;
+        double dev = chord_deviation(c, split);
+        if (split != kNone && dev > best) best = dev, best_vertex = chord_vertex(c, split);
+      }
+      if (best_vertex == kNone) continue;  // cannot happen: a loop has >= 3 vertices
+      add_anchor(best_vertex, kFixAnchor);
+      out_.fixes.push_back({MeshingFix::polygon_anchor, r, kNone, best_vertex, 1});
+      changed = true;
+    }
+    if (!changed) break;
+    any = true;
+  }
+  return any;
+}
+
+// Per-region lists the coloring works on: faces, and vertices on no border (interior vertices).
+void Mesher::index_regions() {
+  on_border_.assign(nv_, 0);
+  for (uint32_t v : loop_vertex_) on_border_[v] = 1;
+  region_face_offsets_.assign(size_t(regions_) + 1, 0);
+  region_interior_offsets_.assign(size_t(regions_) + 1, 0);
+  std::vector<uint32_t> vertex_region(nv_, kNone);
+  for (uint32_t f = 0; f < nf_; ++f) {
+    if (geom_.collapsed[f]) continue;
+    ++region_face_offsets_[labels_[f] + 1];
+    for (int j = 0; j < 3; ++j) vertex_region[mesh_.indices[3 * size_t(f) + j]] = labels_[f];
+  }
+  for (uint32_t v = 0; v < nv_; ++v)
+    if (!on_border_[v] && vertex_region[v] != kNone) ++region_interior_offsets_[vertex_region[v] + 1];
+  for (uint32_t r = 0; r < regions_; ++r) {
+    region_face_offsets_[r + 1] += region_face_offsets_[r];
+    region_interior_offsets_[r + 1] += region_interior_offsets_[r];
+  }
+  region_faces_.resize(region_face_offsets_.back());
+  region_interior_.resize(region_interior_offsets_.back());
+  std::vector<uint32_t> fill(region_face_offsets_.begin(), region_face_offsets_.end() - 1);
+  for (uint32_t f = 0; f < nf_; ++f)
+    if (!geom_.collapsed[f]) region_faces_[fill[labels_[f]]++] = f;
+  fill.assign(region_interior_offsets_.begin(), region_interior_offsets_.end() - 1);
+  for (uint32_t v = 0; v < nv_; ++v)
+    if (!on_border_[v] && vertex_region[v] != kNone) region_interior_[fill[vertex_region[v]]++] = v;
+  interior_region_.assign(nv_, kNone);
+  for (uint32_t v = 0; v < nv_; ++v)
+    if (!on_border_[v]) interior_region_[v] = vertex_region[v];
+  // Each edge appears once per face around it (twice inside the mesh): a repeated relaxation fails
+  // its test at once, cheaper than sorting the lists.
+  edge_offsets_.assign(size_t(nv_) + 1, 0);
+  for (uint32_t v = 0; v < nv_; ++v) {
+    uint32_t count = 0;
+    for (uint32_t i = topology_.vertex_face_offsets[v]; i < topology_.vertex_face_offsets[v + 1]; ++i) {
+      uint32_t f = topology_.vertex_faces[i];
+      if (geom_.collapsed[f]) continue;
+      for (int j = 0; j < 3; ++j) {
+        uint32_t u = mesh_.indices[3 * size_t(f) + j];
+        count += u != v && interior_region_[u] != kNone;
+      }
+    }
+    edge_offsets_[v + 1] = edge_offsets_[v] + count;
+  }
+  edge_target_.resize(edge_offsets_.back());
+  edge_length_.resize(edge_offsets_.back());
+  for (uint32_t v = 0; v < nv_; ++v) {
+    uint32_t k = edge_offsets_[v];
+    V3 p = position(v);
+    for (uint32_t i = topology_.vertex_face_offsets[v]; i < topology_.vertex_face_offsets[v + 1]; ++i) {
+      uint32_t f = topology_.vertex_faces[i];
+      if (geom_.collapsed[f]) continue;
+      for (int j = 0; j < 3; ++j) {
+        uint32_t u = mesh_.indices[3 * size_t(f) + j];
+        if (u == v || interior_region_[u] == kNone) continue;
+        edge_target_[k] = u;
+        edge_length_[k++] = length(position(u) - p);
+      }
+    }
+  }
+  candidates_.assign(regions_, {});
+  cache_.assign(regions_, {});
+}
+
+// The paper's coloring, for the dirty regions. Border vertices: the anchor closest along their chord
+// (ties: the lower vertex id), decided by the chord's owner. Interior vertices: multi-source Dijkstra
+// from the region's border, seeded with the border vertices' distances to their anchor; a region's
+// interior vertices only neighbour its own interior and border, so regions are independent.
+void Mesher::recolor() {
+  std::vector<Chord> chords;
+  std::vector<double> arc;
+  for (uint32_t r = 0; r < regions_; ++r) {
+    if (!dirty_[r] || !region_ok_[r]) continue;
+    loop_chords(region_loop_[r], chords);
+    for (const Chord& c : chords) {
+      if (!owns(chord_region(c), chord_neighbor(c))) continue;
+      arc.assign(c.steps + 1, 0.0);
+      for (uint32_t i = 0; i < c.steps; ++i)
+        arc[i + 1] = arc[i] + length(position(chord_vertex(c, i + 1)) - position(chord_vertex(c, i)));
+      uint32_t a = chord_vertex(c, 0), b = chord_vertex(c, c.steps);
+      for (uint32_t i = 1; i < c.steps; ++i) {
+        double da = arc[i], db = arc[c.steps] - arc[i];
+        bool to_a = da < db || (da == db && a < b);
+        uint32_t v = chord_vertex(c, i);
+        color_[v] = to_a ? a : b;
+        distance_[v] = to_a ? da : db;
+      }
+    }
+  }
+  struct Entry {
+    double d;
+    uint32_t color, v;
+    bool operator>(const Entry& o) const {
+      if (d != o.d) return d > o.d;
+      if (color != o.color) return color > o.color;
+      return v > o.v;
+    }
+  };
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
+  for (uint32_t r = 0; r < regions_; ++r) {
+    if (!dirty_[r]) continue;
+    dirty_[r] = 0;
+    candidates_[r].clear();
+    if (!region_ok_[r] || fell_back_[r]) continue;  // triangulated directly from now on
+    for (uint32_t i = region_interior_offsets_[r]; i < region_interior_offsets_[r + 1]; ++i) {
+      uint32_t v = region_interior_[i];
+      color_[v] = kNone;
+      distance_[v] = std::numeric_limits<double>::infinity();
+    }
+    uint32_t l = region_loop_[r];
+    for (uint32_t i = loop_offsets_[l]; i < loop_offsets_[l + 1]; ++i) {
+      uint32_t v = loop_vertex_[i];
+      if (color_[v] != kNone) heap.push({distance_[v], color_[v], v});
+    }
+    while (!heap.empty()) {
+      Entry top = heap.top();
+      heap.pop();
+      if (top.d != distance_[top.v] || top.color != color_[top.v]) continue;  // stale
+      for (uint32_t i = edge_offsets_[top.v]; i < edge_offsets_[top.v + 1]; ++i) {
+        uint32_t u = edge_target_[i];
+        if (interior_region_[u] != r) continue;
+        double d = top.d + edge_length_[i];
+        if (d < distance_[u] || (d == distance_[u] && top.color < color_[u])) {
+          distance_[u] = d;
+          color_[u] = top.color;
+          heap.push({d, top.color, u});
+        }
+      }
+    }
+    for (uint32_t i = region_face_offsets_[r]; i < region_face_offsets_[r + 1]; ++i) {
+      uint32_t f = region_faces_[i], c[3];
+      for (int j = 0; j < 3; ++j) c[j] = color_[mesh_.indices[3 * size_t(f) + j]];
+      if (c[0] != kNone && c[1] != kNone && c[2] != kNone && c[0] != c[1] && c[1] != c[2] && c[0] != c[2])
+        candidates_[r].insert(candidates_[r].end(), {c[0], c[1], c[2]});
+    }
+  }
+}
+
+// Polygon edges of `region` that cross another one in the proxy plane (their chords cut across the
+// region): for each crossing pair, the farthest vertex of the chord that deviates more from its
+// segment, where to split it. Empty when the projected polygon is simple.
+std::vector<uint32_t> Mesher::crossing_splits(uint32_t region, const std::vector<uint32_t>& polygon) const {
+  std::vector<uint32_t> splits;
+  const V3 n = proxies_.normal[region];
+  if (dot(n, n) == 0) return splits;
+  V3 u = std::abs(n.x) < 0.6 ? cross(n, V3{1, 0, 0}) : cross(n, V3{0, 1, 0});
+  u = (1.0 / length(u)) * u;
+  const V3 w = cross(n, u);
+  const size_t m = polygon.size();
+  std::vector<double> x(m), y(m);
+  for (size_t i = 0; i < m; ++i) x[i] = dot(anchor_position_[polygon[i]], u), y[i] = dot(anchor_position_[polygon[i]], w);
+  auto orient = [&](size_t a, size_t b, size_t c) {
+    double o = (x[b] - x[a]) * (y[c] - y[a]) - (y[b] - y[a]) * (x[c] - x[a]);
+    return (o > 0) - (o < 0);
+  };
+  // The chords in polygon order (both start at the loop's first anchor), with their split vertex.
+  std::vector<Chord> chords;
+  loop_chords(region_loop_[region], chords);
+  assert(chords.size() == m);
+  if (chords.size() != m) return splits;
+  std::vector<double> deviation(m);
+  std::vector<uint32_t> split(m);
+  for (size_t i = 0; i < m; ++i) split[i] = farthest(chords[i], 0, chords[i].steps, deviation[i]);
+  for (size_t i = 0; i < m; ++i)
+    for (size_t j = i + 2; j < m; ++j) {
+      if (i == 0 && j == m - 1) continue;  // adjacent through the wrap
+      size_t i1 = i + 1, j1 = (j + 1) % m;
+      if (orient(i, i1, j) * orient(i, i1, j1) > 0 || orient(j, j1, i) * orient(j, j1, i1) > 0) continue;
+      size_t pick = split[j] == kNone || (split[i] != kNone && deviation[i] >= deviation[j]) ? i : j;
+      if (split[pick] != kNone) splits.push_back(chord_vertex(chords[pick], split[pick]));
+    }
+  std::sort(splits.begin(), splits.end());
+  splits.erase(std::unique(splits.begin(), splits.end()), splits.end());
+  return splits;
+}
+
+// The farthest vertex of the region's chord farthest from its segment (largest d); kNone when no
+// chord has an interior vertex.
+uint32_t Mesher::deviation_split(uint32_t region) const {
+  std::vector<Chord> chords;
+  loop_chords(region_loop_[region], chords);
+  double best = -1;
+  uint32_t best_vertex = kNone;
+  for (const Chord& c : chords) {
+    double d;
+    uint32_t split = farthest(c, 0, c.steps, d);
+    if (split != kNone && d > best) best = d, best_vertex = chord_vertex(c, split);
+  }
+  return best_vertex;
+}
+
+// The coloring's triangles of `region` (output vertex ids, 3 per triangle) form a triangulation of
+// its polygon that faces along the proxy normal and shares no diagonal with another region.
+bool Mesher::valid_coloring(uint32_t region, const std::vector<uint32_t>& polygon, std::vector<uint32_t>& tris) const {
+  const size_t m = polygon.size();
+  if (tris.size() != 3 * (m - 2)) return false;
+  // Position of each output vertex in the polygon.
+  auto local = [&](uint32_t id) -> uint32_t {
+    for (uint32_t i = 0; i < m; ++i)
+      if (polygon[i] == id) return i;
+    return kNone;
+  };
+  std::vector<uint64_t> directed;
+  directed.reserve(tris.size());
+  for (size_t t = 0; t < tris.size(); t += 3) {
+    uint32_t l[3];
+    for (int j = 0; j < 3; ++j)
+      if ((l[j] = local(tris[t + j])) == kNone) return false;
+    if (!faces_along(anchor_position_[tris[t]], anchor_position_[tris[t + 1]], anchor_position_[tris[t + 2]],
+                     proxies_.normal[region]))
+      return false;
+    for (int j = 0; j < 3; ++j) directed.push_back(uint64_t(l[j]) << 32 | l[(j + 1) % 3]);
+  }
+  std::sort(directed.begin(), directed.end());
+  if (std::adjacent_find(directed.begin(), directed.end()) != directed.end()) return false;
+  size_t polygon_edges = 0;
+  for (uint64_t e : directed) {
+    uint32_t u = uint32_t(e >> 32), v = uint32_t(e);
+    if (v == (u + 1) % m) {
+      ++polygon_edges;
+      continue;
+    }
+    if (u == (v + 1) % m) return false;  // a polygon edge against the border's direction
+    if (!std::binary_search(directed.begin(), directed.end(), uint64_t(v) << 32 | u)) return false;
+    if (u < v && !diagonal_free(polygon[u], polygon[v])) return false;
+  }
+  return polygon_edges == m;
+}
+
+// Triangulation of `polygon` by interval dynamic programming: fewest bad triangles first (a
+// diagonal used elsewhere costs m, a triangle facing away from the proxy normal or a sliver costs
+// 1), then the largest smallest angle. The order (cost, then -quality) is monotone under combining
+// two sub-polygons with a triangle, so the optimum is exact. Returns the cost (0: every triangle
+// acceptable); triangles (output ids) go to `tris`.
+uint32_t Mesher::triangulate_polygon(uint32_t region, const std::vector<uint32_t>& polygon,
+                                     std::vector<uint32_t>& tris) const {
+  const uint32_t m = uint32_t(polygon.size());
+  tris.clear();
+  if (m > kMaxDynamicProgramming) {  // a fan: no guarantee, reported by the caller if it fails
+    uint32_t cost = 0;
+    for (uint32_t i = 1; i + 1 < m; ++i) {
+      tris.insert(tris.end(), {polygon[0], polygon[i], polygon[i + 1]});
+      cost += !faces_along(anchor_position_[polygon[0]], anchor_position_[polygon[i]],
+                           anchor_position_[polygon[i + 1]], proxies_.normal[region]);
+    }
+    return cost;
+  }
+  const V3 n = proxies_.normal[region];
+  const bool any_direction = dot(n, n) == 0;
+  std::vector<V3> p(m);
+  for (uint32_t i = 0; i < m; ++i) p[i] = anchor_position_[polygon[i]];
+  // Edge lengths and which diagonals are free, once per pair.
+  std::vector<double> len(size_t(m) * m);
+  std::vector<uint8_t> allowed(size_t(m) * m, 1);
+  for (uint32_t i = 0; i < m; ++i)
+    for (uint32_t j = i + 1; j < m; ++j) {
+      len[size_t(i) * m + j] = length(p[j] - p[i]);
+      if (j != i + 1 && !(i == 0 && j == m - 1)) allowed[size_t(i) * m + j] = diagonal_free(polygon[i], polygon[j]);
+    }
+  const uint32_t kWorst = std::numeric_limits<uint32_t>::max();
+  std::vector<uint32_t> cost(size_t(m) * m, kWorst), choice(size_t(m) * m, kNone);
+  std::vector<double> quality(size_t(m) * m, -1.0);
+  for (uint32_t i = 0; i + 1 < m; ++i) {
+    cost[size_t(i) * m + i + 1] = 0;
+    quality[size_t(i) * m + i + 1] = std::numeric_limits<double>::infinity();
+  }
+  for (uint32_t span = 2; span < m; ++span)
+    for (uint32_t i = 0; i + span < m; ++i) {
+      const uint32_t j = i + span;
+      const size_t ij = size_t(i) * m + j;
+      for (uint32_t k = i + 1; k < j; ++k) {
+        const size_t ik = size_t(i) * m + k, kj = size_t(k) * m + j;
+        uint32_t c = cost[ik] + cost[kj];
+        double q = std::min(quality[ik], quality[kj]);
+        if (c > cost[ij] || (c == cost[ij] && !(q > quality[ij]))) continue;  // cannot do better
+        if (!allowed[ik] || !allowed[kj]) c += m;
+        // As faces_along and min_angle_sine, with the lengths from the table.
+        V3 cr = cross(p[k] - p[i], p[j] - p[i]);
+        double area2 = length(cr);
+        double lik = len[ik], lkj = len[kj], lij = len[ij];
+        double big = std::max({lkj * lij, lij * lik, lik * lkj});
+        double sine = big > 0 ? area2 / big : 0.0;
+        if (sine > kMinSine && (any_direction || dot(cr, n) > kMinFacingCosine * area2))
+          q = std::min(q, sine);
+        else
+          ++c;
+        if (c < cost[ij] || (c == cost[ij] && q > quality[ij])) cost[ij] = c, quality[ij] = q, choice[ij] = k;
+      }
+    }
+  std::vector<std::pair<uint32_t, uint32_t>> stack{{0, m - 1}};
+  while (!stack.empty()) {
+    auto [i, j] = stack.back();
+    stack.pop_back();
+    if (j < i + 2) continue;
+    uint32_t k = choice[size_t(i) * m + j];
+    tris.insert(tris.end(), {polygon[i], polygon[k], polygon[j]});
+    stack.push_back({i, k});
+    stack.push_back({k, j});
+  }
+  return cost[m - 1];
+}
+
+// One meshing round with the current anchors. Returns false when anchors were added (redo).
+bool Mesher::triangulate(bool last_round) {
+  // Output vertices and their positions.
+  out_id_.assign(nv_, kNone);
+  anchors_.clear();
+  anchor_position_.clear();
+  for (uint32_t v = 0; v < nv_; ++v) {
+    if (!anchor_[v]) continue;
+    out_id_[v] = uint32_t(anchors_.size());
+    anchors_.push_back(v);
+    uint32_t seen[64], distinct = 0;
+    V3 sum{}, p = position(v);
+    if (at_vertex_[v]) {
+      anchor_position_.push_back(rounded(p));
+      continue;
+    }
+    for (uint32_t i = topology_.vertex_face_offsets[v]; i < topology_.vertex_face_offsets[v + 1]; ++i) {
+      uint32_t f = topology_.vertex_faces[i];
+      if (geom_.collapsed[f]) continue;
+      uint32_t r = labels_[f];
+      if (std::find(seen, seen + distinct, r) != seen + distinct || distinct == 64) continue;
+      seen[distinct++] = r;
+      V3 nr = proxies_.normal[r];
+      sum = sum + (p - dot(p - proxies_.centroid[r], nr) * nr);
+    }
+    anchor_position_.push_back(rounded(distinct ? (1.0 / distinct) * sum : p));
+  }
+  // Polygons, and their edges.
+  polygon_offsets_.assign(1, 0);
+  polygon_vertices_.clear();
+  edges_.clear();
+  for (uint32_t r = 0; r < regions_; ++r) {
+    if (region_ok_[r]) {
+      uint32_t l = region_loop_[r], off = loop_offsets_[l], m = loop_size(l);
+      size_t first = polygon_vertices_.size();
+      for (uint32_t i = 0; i < m; ++i)
+        if (anchor_[loop_vertex_[off + i]]) polygon_vertices_.push_back(out_id_[loop_vertex_[off + i]]);
+      size_t count = polygon_vertices_.size() - first;
+      for (size_t i = 0; i < count; ++i)
+        edges_.insert(edge_key(polygon_vertices_[first + i], polygon_vertices_[first + (i + 1) % count]));
+    }
+    polygon_offsets_.push_back(uint32_t(polygon_vertices_.size()));
+  }
+  out_.stats.chords = uint32_t(edges_.size());
+
+  recolor();
+
+  triangles_.clear();
+  triangle_regions_.clear();
+  out_.stats.coloring_regions = out_.stats.fallback_regions = 0;
+  out_.stats.flipped_triangles = 0;
+  std::vector<MeshingFix> round_fixes;
+  bool redo = false;
+  std::vector<uint32_t> polygon, tris;
+  std::vector<Chord> chords;
+  for (uint32_t r = 0; r < regions_; ++r) {
+    if (!region_ok_[r]) continue;
+    polygon.assign(polygon_vertices_.begin() + polygon_offsets_[r], polygon_vertices_.begin() + polygon_offsets_[r + 1]);
+    const size_t m = polygon.size();
+    if (m < 3) continue;  // cannot happen: settle_anchors gives every polygon three anchors
+    auto is_diagonal = [&](uint32_t a, uint32_t b) {
+      size_t ia = std::find(polygon.begin(), polygon.end(), a) - polygon.begin();
+      size_t ib = std::find(polygon.begin(), polygon.end(), b) - polygon.begin();
+      return (ia + 1) % m != ib && (ib + 1) % m != ia;
+    };
+    tris.resize(candidates_[r].size());
+    for (size_t i = 0; i < tris.size(); ++i) tris[i] = out_id_[candidates_[r][i]];
+    if (!fell_back_[r] && valid_coloring(r, polygon, tris)) {
+      ++out_.stats.coloring_regions;
+    } else {
+      fell_back_[r] = 1;
+      // Chords crossing in the proxy plane leave no unflipped triangulation: split them first.
+      std::vector<uint32_t> splits;
+      if (!last_round && flip_anchors_[r] < kMaxFlipAnchors) splits = crossing_splits(r, polygon);
+      // Else the direct triangulation of the last round, if the polygon did not change and it still
+      // holds; else a new one.
+      CachedTriangulation& cached = cache_[r];
+      uint32_t cost = 1;
+      if (splits.empty()) {
+        bool reused = !cached.polygon.empty() && cached.polygon == polygon;
+        for (size_t i = 0; i < m && reused; ++i) {
+          V3 a = cached.positions[i], b = anchor_position_[polygon[i]];
+          reused = a.x == b.x && a.y == b.y && a.z == b.z;
+        }
+        if (reused) {
+          // Same polygon, same positions: only diagonals used elsewhere can have changed.
+          uint32_t recount = 0;
+          for (size_t t = 0; t < cached.tris.size(); t += 3) {
+            const uint32_t* tri = &cached.tris[t];
+            recount += !faces_along(anchor_position_[tri[0]], anchor_position_[tri[1]], anchor_position_[tri[2]],
+                                    proxies_.normal[r]);
+            for (int j = 0; j < 3; ++j)
+              if (is_diagonal(tri[j], tri[(j + 1) % 3]) && !diagonal_free(tri[j], tri[(j + 1) % 3]))
+                recount += uint32_t(m);
+          }
+          reused = recount <= cached.cost;
+          cost = recount;
+        }
+        if (reused) {
+          tris = cached.tris;
+        } else {
+          cost = triangulate_polygon(r, polygon, tris);
+          cached.polygon = polygon;
+          cached.tris = tris;
+          cached.cost = cost;
+          cached.positions.resize(m);
+          for (size_t i = 0; i < m; ++i) cached.positions[i] = anchor_position_[polygon[i]];
+        }
+      }
+      if (cost > 0 && !last_round) {
+        // No acceptable triangulation: the region's anchors go back to their mesh vertices (the
+        // averaged projections can fold a thin region); else its most deviating chord is split.
+        if (splits.empty() && !reverted_[r]) {
+          reverted_[r] = 1;
+          uint32_t moved = 0;
+          for (uint32_t id : polygon)
+            if (!at_vertex_[anchors_[id]]) at_vertex_[anchors_[id]] = 1, ++moved;
+          if (moved > 0) {
+            out_.stats.vertex_anchors += moved;
+            out_.fixes.push_back({MeshingFix::anchor_position, r, kNone, kNone, moved});
+            redo = true;
+            continue;
+          }
+        }
+        if (splits.empty() && flip_anchors_[r] < kMaxDeviationAnchors) {
+          uint32_t v = deviation_split(r);
+          if (v != kNone) splits.push_back(v);
+        }
+        bool added = false;
+        for (uint32_t v : splits) {
+          if (anchor_[v] || flip_anchors_[r] >= kMaxFlipAnchors) continue;
+          ++flip_anchors_[r];
+          add_anchor(v, kFixAnchor);
+          out_.fixes.push_back({MeshingFix::flip_anchor, r, kNone, v, 1});
+          added = true;
+        }
+        if (added) {
+          redo = true;
+          continue;
+        }
+      }
+      if (!splits.empty()) cost = triangulate_polygon(r, polygon, tris);  // out of anchors: take the best
+      ++out_.stats.fallback_regions;
+      round_fixes.push_back({MeshingFix::fallback_triangulation, r, kNone, kNone, 0});
+      if (cost > 0) {  // kept as it is: count what is wrong with it
+        uint32_t bad = 0;
+        for (size_t t = 0; t < tris.size(); t += 3) {
+          bool ok = faces_along(anchor_position_[tris[t]], anchor_position_[tris[t + 1]],
+                                anchor_position_[tris[t + 2]], proxies_.normal[r]);
+          for (int j = 0; j < 3 && ok; ++j) {
+            uint32_t a = tris[t + j], b = tris[t + (j + 1) % 3];
+            if (is_diagonal(a, b) && !diagonal_free(a, b)) ok = false;
+          }
+          bad += !ok;
+        }
+        out_.stats.flipped_triangles += bad;
+        round_fixes.push_back({MeshingFix::flipped_triangles, r, kNone, kNone, bad});
+      }
+    }
+    // Accepted: its diagonals may not be used by any other region.
+    for (size_t t = 0; t < tris.size(); t += 3) {
+      for (int j = 0; j < 3; ++j) {
+        uint32_t a = tris[t + j], b = tris[t + (j + 1) % 3];
+        if (is_diagonal(a, b)) edges_.insert(edge_key(a, b));
+      }
+      triangles_.insert(triangles_.end(), {tris[t], tris[t + 1], tris[t + 2]});
+      triangle_regions_.push_back(r);
+    }
+  }
+  if (redo) return false;
+  out_.fixes.insert(out_.fixes.end(), round_fixes.begin(), round_fixes.end());
+  return true;
+}
+
+// Copies the round's result into the output and checks the output's edges.
+void Mesher::finish() {
+  Mesh& m = out_.mesh;
+  m.positions.resize(3 * anchors_.size());
+  for (size_t i = 0; i < anchors_.size(); ++i) {
+    m.positions[3 * i] = float(anchor_position_[i].x);
+    m.positions[3 * i + 1] = float(anchor_position_[i].y);
+    m.positions[3 * i + 2] = float(anchor_position_[i].z);
+  }
+  m.indices = std::move(triangles_);
+  m.source_polygon.clear();
+  out_.triangle_regions = std::move(triangle_regions_);
+  out_.anchor_vertices = std::move(anchors_);
+  out_.polygon_offsets = std::move(polygon_offsets_);
+  out_.polygon_vertices = std::move(polygon_vertices_);
+
+  std::vector<uint64_t> directed;
+  directed.reserve(m.indices.size());
+  for (size_t t = 0; t < m.indices.size(); t += 3)
+    for (int j = 0; j < 3; ++j) directed.push_back(uint64_t(m.indices[t + j]) << 32 | m.indices[t + (j + 1) % 3]);
+  std::vector<uint64_t> undirected(directed.size());
+  for (size_t i = 0; i < directed.size(); ++i) undirected[i] = edge_key(uint32_t(directed[i] >> 32), uint32_t(directed[i]));
+  std::sort(undirected.begin(), undirected.end());
+  std::sort(directed.begin(), directed.end());
+  for (size_t i = 0; i < undirected.size();) {
+    size_t j = i;
+    while (j < undirected.size() && undirected[j] == undirected[i]) ++j;
+    if (j - i == 1) ++out_.stats.boundary_edges;
+    if (j - i >= 3) ++out_.stats.nonmanifold_edges;
+    i = j;
+  }
+  for (size_t i = 0; i + 1 < directed.size(); ++i)
+    if (directed[i] == directed[i + 1]) ++out_.stats.inconsistent_edges;
+}
+
+void Mesher::run() {
+  find_open_vertices();
+  extract_loops();
+  mark_corner_anchors();
+  at_vertex_.assign(nv_, 0);
+  flip_anchors_.assign(regions_, 0);
+  reverted_.assign(regions_, 0);
+  fell_back_.assign(regions_, 0);
+  dirty_.assign(regions_, 1);
+  unsettled_.assign(regions_, 1);
+  index_regions();
+  color_.assign(nv_, kNone);
+  distance_.assign(nv_, std::numeric_limits<double>::infinity());
+  for (uint32_t v = 0; v < nv_; ++v)
+    if (anchor_[v]) color_[v] = v, distance_[v] = 0;
+  settle_anchors();
+  for (uint32_t round = 0;; ++round) {
+    out_.stats.meshing_rounds = round + 1;
+    if (triangulate(round + 1 >= kMaxMeshingRounds)) break;
+    settle_anchors();
+  }
+  finish();
+}
+
+// ---- partition
+
+void validate(const Mesh& mesh, const ApproximateOptions& o) {
+  bool fixed = o.proxies > 0, driven = o.max_error >= 0;
+  if (std::isnan(o.max_error)) throw OptionError("max error must be a number >= 0");
+  if (fixed == driven)
+    throw OptionError(fixed ? "give either a number of proxies or a maximum error, not both"
+                            : "give a number of proxies (> 0) or a maximum error (>= 0)");
+  if (driven && !std::isfinite(o.max_error)) throw OptionError("max error must be finite");
+  check_meshing_options(o.meshing);
+  if (mesh.face_count() == 0) throw OptionError("the mesh has no face");
+}
+
+ClusterOptions cluster_options(const ApproximateOptions& o, uint32_t clusters) {
+  ClusterOptions c;
+  c.clusters = clusters;
+  c.metric = Metric::l21;
+  c.init = Init::hierarchical;
+  c.topology = TopologyMode::preserving;
+  c.max_iterations = o.max_iterations;
+  c.threads = o.threads;
+  c.device = o.device;
+  c.progress = o.progress;
+  return c;
+}
+
+// Boundary iterations until no face moves, max_iterations or a stall (as cluster()).
+bool iterate(BoundaryIteration& it, const ApproximateOptions& o, uint32_t round, Clustering& out) {
+  double best = it.energy();
+  uint32_t stalled = 0;
+  for (uint32_t i = 0; i < o.max_iterations; ++i) {
+    IterationRecord r = it.step();
+    r.round = round;
+    out.history.push_back(r);
+    ++out.iterations;
+    if (o.progress) o.progress(ClusterProgress{"iterate", out.iterations, r.moves});
+    if (r.moves == 0) return true;
+    if (r.energy < best) {
+      best = r.energy;
+      stalled = 0;
+    } else if (++stalled >= kStallLimit) {
+      return false;
+    }
+  }
+  return false;
+}
+
+// Iterate + repair rounds from the iteration's current labels, as cluster() does. Returns the next
+// free round number.
+uint32_t converge(BoundaryIteration& it, const ClusterProblem& problem, const Topology& topology,
+                  const ApproximateOptions& o, uint32_t round, Clustering& out) {
+  for (uint32_t repairs = 0;; ++repairs, ++round) {
+    out.converged = iterate(it, o, round, out);
+    std::vector<uint32_t> current = it.labels();
+    std::vector<float> generators = it.generators();
+    bool repaired = repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair);
+    uint32_t restored = restore_cluster_count(problem, topology, generators, current, problem.clusters);
+    out.repair.restored_clusters += restored;
+    if (!repaired && restored == 0) return round + 1;
+    it.reset(std::move(current));
+    out.history.push_back(IterationRecord{it.energy(), 0, 0, round + 1});
+    if (repairs + 1 >= kMaxRepairRounds) {
+      out.converged = false;
+      return round + 2;
+    }
+    ++out.repair.rounds;
+  }
+}
+
+// Continues a clustering on the CPU engine: adds proxies by splitting the regions of highest
+// distortion, and teleports proxies (VSA): the adjacent pair whose merge costs least is merged and
+// the region of highest distortion split in two, then the boundary iteration runs again; the
+// result is kept only when the distortion dropped. Teleports repair what a greedy initialization
+// can leave behind (two proxies on one plane, one proxy across a sharp edge).
+class PartitionRefiner {
+ public:
+  PartitionRefiner(const Mesh& mesh, const Topology& topology, const ApproximateOptions& o, Clustering& out)
+      : mesh_(mesh), topology_(topology), o_(o), out_(out), problem_(make_problem(mesh, o, out)), pool_(o.threads),
+        it_(problem_, mesh, topology, TopologyMode::preserving, true, pool_) {
+    it_.reset(out.labels);
+    for (const IterationRecord& r : out.history) round_ = std::max(round_, r.round + 1);
+  }
+
+  uint32_t clusters() const { return problem_.clusters; }
+  const std::vector<uint32_t>& labels() const { return it_.labels(); }
+
+  // Splits the `add` regions of highest distortion (fewer when not enough have two faces), then
+  // iterates to convergence.
+  void add_proxies(uint32_t add) {
+    std::vector<uint32_t> labels = it_.labels();
+    uint32_t grown = problem_.clusters + add;
+    problem_.clusters = grown;
+    std::vector<float> generators = optimal_generators(labels);
+    restore_cluster_count(problem_, topology_, generators, labels, grown);
+    restart(std::move(labels));
+  }
+
+  // Up to `attempts` teleports, stopping at the first that does not lower the distortion or when no
+  // merge is cheap enough (less than half the worst region's distortion, as in VSA). Returns the
+  // number kept.
+  uint32_t teleport(uint32_t attempts) {
+    uint32_t kept = 0, low_gains = 0;
+    const uint32_t n = problem_.clusters;
+    for (uint32_t attempt = 0; attempt < attempts && n >= 3; ++attempt) {
+      const std::vector<int64_t>& sums = it_.sums();
+      auto S = [&](uint32_t c) {
+        const int64_t* s = &sums[size_t(c) * kSumComponents];
+        return V3{double(s[1]), double(s[2]), double(s[3])};
+      };
+      uint32_t worst = 0;
+      double worst_energy = -1;
+      for (uint32_t c = 0; c < n; ++c) {
+        double e = cluster_energy(problem_, &sums[size_t(c) * kSumComponents], &it_.generators()[3 * size_t(c)]);
+        if (e > worst_energy) worst_energy = e, worst = c;
+      }
+      // Merge cost of adjacent clusters i, j with their optimal normals: 2 (|S_i| + |S_j| - |S_i + S_j|).
+      const std::vector<uint32_t>& labels = it_.labels();
+      double best = std::numeric_limits<double>::infinity();
+      uint32_t keep = kNone, drop = kNone;
+      for (uint32_t f = 0; f < labels.size(); ++f)
+        for (int e = 0; e < 3; ++e) {
+          uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
+          if (o == kNone || o < f) continue;
+          uint32_t i = labels[f], j = labels[o];
+          if (i == j || i == worst || j == worst) continue;
+          double cost = 2 * (length(S(i)) + length(S(j)) - length(S(i) + S(j))) / problem_.fixed_scale;
+          if (cost < best || (cost == best && std::min(i, j) < std::min(keep, drop)))
+            best = cost, keep = std::min(i, j), drop = std::max(i, j);
+        }
+      if (keep == kNone || !(best < 0.5 * worst_energy)) break;
+      const double before = it_.energy();
+      std::vector<uint32_t> saved = it_.labels();
+      const size_t history = out_.history.size();
+      const uint32_t iterations = out_.iterations, round = round_;
+      const bool converged = out_.converged;
+      std::vector<uint32_t> merged = saved;
+      for (uint32_t& l : merged)
+        if (l == drop) l = keep;
+      std::vector<float> generators = optimal_generators(merged);
+      restore_cluster_count(problem_, topology_, generators, merged, n);  // splits the worst, into `drop`
+      restart(std::move(merged));
+      if (it_.energy() < before * (1 - 1e-9)) {
+        ++kept;
+        // Kept; but two small gains in a row say the partition has settled.
+        low_gains = it_.energy() > before * (1 - kTeleportMinGain) ? low_gains + 1 : 0;
+        if (low_gains >= 2) break;
+        continue;
+      }
+      // Not better: back to where it was.
+      it_.reset(std::move(saved));
+      out_.history.resize(history);
+      out_.iterations = iterations;
+      out_.converged = converged;
+      round_ = round;
+      break;
+    }
+    return kept;
+  }
+
+  void finish() {
+    out_.labels = it_.labels();
+    out_.generators = it_.generators();
+  }
+
+ private:
+  static ClusterProblem make_problem(const Mesh& mesh, const ApproximateOptions& o, const Clustering& out) {
+    ClusterOptions co = cluster_options(o, uint32_t(out.generators.size() / 3));
+    co.device.clear();
+    return make_cluster_problem(mesh, co);
+  }
+  std::vector<float> optimal_generators(const std::vector<uint32_t>& labels) const {
+    std::vector<int64_t> sums = compute_cluster_sums(problem_, labels, problem_.clusters);
+    std::vector<float> g(3 * size_t(problem_.clusters), 0.0f);
+    for (uint32_t c = 0; c < problem_.clusters; ++c)
+      compute_generator(problem_, &sums[size_t(c) * kSumComponents], &g[3 * size_t(c)]);
+    return g;
+  }
+  void restart(std::vector<uint32_t> labels) {
+    it_.reset(std::move(labels));
+    out_.history.push_back(IterationRecord{it_.energy(), 0, 0, round_});
+    round_ = converge(it_, problem_, topology_, o_, round_, out_);
+  }
+
+  const Mesh& mesh_;
+  const Topology& topology_;
+  const ApproximateOptions& o_;
+  Clustering& out_;
+  ClusterProblem problem_;
+  WorkerPool pool_;
+  BoundaryIteration it_;
+  uint32_t round_ = 0;
+};
+
+double relative_distortion(const FaceGeometry& geom, const std::vector<uint32_t>& labels, uint32_t n) {
+  Proxies p = compute_proxies(geom, labels, n);
+  double area = std::accumulate(p.area.begin(), p.area.end(), 0.0);
+  return area > 0 ? partition_distortion(geom, labels, p) / area : 0.0;
+}
+
+// The partition: cluster() with the fixed count, or error-driven rounds (see the file comment),
+// with teleports after each.
+Clustering make_partition(const Mesh& mesh, const Topology& topology, const FaceGeometry& geom,
+                          const ApproximateOptions& o, std::vector<RefinementRound>& rounds, double& refine_seconds) {
+  const uint32_t nf = uint32_t(mesh.face_count());
+  const bool driven = o.proxies == 0;
+  uint32_t n = driven ? std::max(topology.component_count, std::min(nf, 4u)) : o.proxies;
+  Clustering out = cluster(mesh, topology, cluster_options(o, n));
+  if (!o.teleport && !driven) return out;
+  auto t = Clock::now();
+  PartitionRefiner refiner(mesh, topology, o, out);
+  for (;;) {
+    if (o.teleport) refiner.teleport(kMaxTeleports);
+    if (!driven) break;
+    double relative = relative_distortion(geom, refiner.labels(), n);
+    rounds.push_back({n, relative});
+    if (relative <= o.max_error || n >= nf) break;
+    // E ~ 1/n: about n (ratio - 1) more proxies reach the bound; damped, at least 1, at most n.
+    double ratio = o.max_error > 0 ? relative / o.max_error : 2.0;
+    uint64_t add = std::clamp<uint64_t>(uint64_t(std::ceil(0.75 * n * (ratio - 1))), 1, n);
+    add = std::min<uint64_t>(add, nf - n);
+    refiner.add_proxies(uint32_t(add));
+    n = refiner.clusters();
+  }
+  refiner.finish();
+  refine_seconds = seconds_since(t);
+  return out;
+}
+
+}  // namespace
+
+double l21_distortion(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t regions, double* total_area) {
+  check_labels(mesh, labels, regions);
+  FaceGeometry g = face_geometry(mesh);
+  Proxies p = compute_proxies(g, labels, regions);
+  if (total_area) *total_area = std::accumulate(p.area.begin(), p.area.end(), 0.0);
+  return partition_distortion(g, labels, p);
+}
+
+namespace {
+
+// Splits each listed region in two by its normals: seeds at the face whose normal is farthest from
+// the proxy normal and the face farthest from that one; both grow over the region's faces in order
+// of their normal's distance to the seed's (a flood like VSA's), so both halves are connected.
+// Returns the new region count.
+uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const Proxies& proxies,
+                          std::vector<uint32_t>& labels, uint32_t regions, const std::vector<uint32_t>& split,
+                          MeshingFix::Kind kind, std::vector<MeshingFix>& fixes) {
+  std::vector<uint8_t> wanted(regions, 0);
+  for (uint32_t r : split) wanted[r] = 1;
+  std::vector<uint32_t> seed_a(regions, kNone), seed_b(regions, kNone);
+  std::vector<double> far_a(regions, 2), far_b(regions, 2);
+  for (uint32_t f = 0; f < labels.size(); ++f) {
+    uint32_t r = labels[f];
+    if (!wanted[r] || g.collapsed[f]) continue;
+    double c = dot(g.normal[f], proxies.normal[r]);
+    if (c < far_a[r]) far_a[r] = c, seed_a[r] = f;
+  }
+  for (uint32_t f = 0; f < labels.size(); ++f) {
+    uint32_t r = labels[f];
+    if (!wanted[r] || g.collapsed[f] || f == seed_a[r]) continue;
+    double c = dot(g.normal[f], g.normal[seed_a[r]]);
+    if (c < far_b[r]) far_b[r] = c, seed_b[r] = f;
+  }
+  struct Entry {
+    double d;
+    uint32_t face, label;
+    bool operator>(const Entry& o) const { return d != o.d ? d > o.d : face > o.face; }
+  };
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
+  std::vector<uint32_t> grown(labels.size(), kNone);
+  std::vector<V3> seed_normal;
+  uint32_t count = regions;
+  for (uint32_t r = 0; r < regions; ++r) {
+    if (!wanted[r] || seed_b[r] == kNone) continue;
+    uint32_t fresh = count++;
+    fixes.push_back({kind, r, fresh, kNone, 1});
+    heap.push({0, seed_a[r], r});
+    heap.push({0, seed_b[r], fresh});
+  }
+  seed_normal.resize(count);
+  for (uint32_t r = 0; r < regions; ++r)
+    if (wanted[r] && seed_b[r] != kNone) seed_normal[r] = g.normal[seed_a[r]];
+  for (uint32_t r = 0, fresh = regions; r < regions; ++r)
+    if (wanted[r] && seed_b[r] != kNone) seed_normal[fresh++] = g.normal[seed_b[r]];
+  while (!heap.empty()) {
+    Entry e = heap.top();
+    heap.pop();
+    if (grown[e.face] != kNone) continue;
+    grown[e.face] = e.label;
+    for (int k = 0; k < 3; ++k) {
+      uint32_t o = topology.face_adjacent[3 * size_t(e.face) + k];
+      if (o == kNone || grown[o] != kNone || labels[o] != labels[e.face] || g.collapsed[o]) continue;
+      V3 d = g.normal[o] - seed_normal[e.label];
+      heap.push({dot(d, d), o, e.label});
+    }
+  }
+  for (uint32_t f = 0; f < labels.size(); ++f)
+    if (grown[f] != kNone) labels[f] = grown[f];
+  return count;
+}
+
+// A closed component covered by fewer than 4 regions would come out flat (2 regions: two copies of
+// one triangle): its largest region is split by its normals until it has 4 (or nothing splits).
+uint32_t make_solid_components(const Mesh& mesh, const Topology& topology, const FaceGeometry& g,
+                               std::vector<uint32_t>& labels, uint32_t count, std::vector<MeshingFix>& fixes) {
+  const uint32_t components = topology.component_count;
+  std::vector<uint8_t> open(components, 0);
+  for (size_t h = 0; h < topology.face_adjacent.size(); ++h)
+    if (topology.face_adjacent[h] == kNone) open[topology.face_component[h / 3]] = 1;
+  for (int pass = 0; pass < 3; ++pass) {
+    // Regions of each closed component (a region lies in one component: regions are connected).
+    std::vector<uint64_t> pairs;
+    for (uint32_t f = 0; f < labels.size(); ++f)
+      if (!open[topology.face_component[f]] && !g.collapsed[f])
+        pairs.push_back(uint64_t(topology.face_component[f]) << 32 | labels[f]);
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    Proxies proxies = compute_proxies(g, labels, count);
+    std::vector<uint32_t> split;
+    for (size_t i = 0; i < pairs.size();) {
+      size_t j = i;
+      uint32_t largest = kNone;
+      while (j < pairs.size() && pairs[j] >> 32 == pairs[i] >> 32) {
+        uint32_t r = uint32_t(pairs[j]);
+        if (largest == kNone || proxies.area[r] > proxies.area[largest]) largest = r;
+        ++j;
+      }
+      if (j - i < 4) split.push_back(largest);
+      i = j;
+    }
+    if (split.empty()) break;
+    uint32_t before = count;
+    count = split_by_normals(topology, g, proxies, labels, count, split, MeshingFix::solid_component, fixes);
+    count = make_disk_regions(mesh, topology, g, labels, count, fixes);
+    if (count == before) break;  // single faces: nothing left to split
+  }
+  return count;
+}
+
+ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topology, const FaceGeometry& geom,
+                                       std::vector<uint32_t> labels, uint32_t regions, const MeshingOptions& options) {
+  auto t = Clock::now();
+  ShapeApproximation out;
+  out.partition_proxies = regions;
+  std::vector<MeshingFix> partition_fixes;  // region splits, kept over the passes
+  uint32_t count = make_disk_regions(mesh, topology, geom, labels, regions, partition_fixes);
+  count = make_solid_components(mesh, topology, geom, labels, count, partition_fixes);
+  Proxies proxies;
+  for (uint32_t pass = 0;; ++pass) {
+    proxies = compute_proxies(geom, labels, count);
+    out.fixes = partition_fixes;
+    out.stats = MeshingStats{};
+    Mesher(mesh, topology, geom, labels, count, proxies, options, out).run();
+    // Regions still with flipped triangles are too curved for one polygon: split them, mesh again.
+    std::vector<uint32_t> curved;
+    for (const MeshingFix& f : out.fixes)
+      if (f.kind == MeshingFix::flipped_triangles) curved.push_back(f.region);
+    if (curved.empty() || pass + 1 >= kMaxSplitPasses) break;
+    count = split_by_normals(topology, geom, proxies, labels, count, curved, MeshingFix::split_curved, partition_fixes);
+    count = make_disk_regions(mesh, topology, geom, labels, count, partition_fixes);
+  }
+  out.regions = count;
+  out.labels = std::move(labels);
+  out.proxy_normals.resize(3 * size_t(out.regions));
+  out.proxy_centroids.resize(3 * size_t(out.regions));
+  for (uint32_t r = 0; r < out.regions; ++r) {
+    const V3 n = proxies.normal[r], x = proxies.centroid[r];
+    out.proxy_normals[3 * r] = float(n.x), out.proxy_normals[3 * r + 1] = float(n.y), out.proxy_normals[3 * r + 2] = float(n.z);
+    out.proxy_centroids[3 * r] = float(x.x), out.proxy_centroids[3 * r + 1] = float(x.y), out.proxy_centroids[3 * r + 2] = float(x.z);
+  }
+  out.total_area = std::accumulate(proxies.area.begin(), proxies.area.end(), 0.0);
+  out.distortion = partition_distortion(geom, out.labels, proxies);
+  out.relative_error = out.total_area > 0 ? out.distortion / out.total_area : 0.0;
+  out.meshing_seconds = seconds_since(t);
+  return out;
+}
+
+}  // namespace
+
+ShapeApproximation mesh_partition(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                                  uint32_t regions, const MeshingOptions& options) {
+  check_labels(mesh, labels, regions);
+  check_meshing_options(options);
+  if (topology.face_adjacent.size() != 3 * mesh.face_count())
+    throw OptionError("topology does not belong to this mesh");
+  FaceGeometry geom = face_geometry(mesh);
+  return mesh_partition_with(mesh, topology, geom, labels, regions, options);
+}
+
+ShapeApproximation approximate_shape(const Mesh& mesh, const Topology& topology, const ApproximateOptions& options) {
+  validate(mesh, options);
+  auto t = Clock::now();
+  FaceGeometry geom = face_geometry(mesh);
+  std::vector<RefinementRound> rounds;
+  double refine_s = 0;
+  Clustering c = make_partition(mesh, topology, geom, options, rounds, refine_s);
+  double partition_s = seconds_since(t);
+  uint32_t n = uint32_t(c.generators.size() / 3);
+  ShapeApproximation out = mesh_partition_with(mesh, topology, geom, c.labels, n, options.meshing);
+  out.clustering = std::move(c);
+  out.requested_proxies = options.proxies;
+  out.rounds = std::move(rounds);
+  out.partition_seconds = partition_s;
+  out.refine_seconds = refine_s;
+  return out;
+}
+
+ShapeApproximation approximate_shape(const Mesh& mesh, const ApproximateOptions& options) {
+  validate(mesh, options);
+  return approximate_shape(mesh, build_topology(mesh), options);
+}
+
+ChordRule parse_chord_rule(const std::string& s) {
+  if (s == "paper") return ChordRule::paper;
+  if (s == "cgal") return ChordRule::cgal;
+  throw OptionError("unknown chord rule '" + s + "' (expected paper or cgal)");
+}
+
+const char* to_string(ChordRule r) { return r == ChordRule::paper ? "paper" : "cgal"; }
+
+const char* to_string(MeshingFix::Kind k) {
+  switch (k) {
+    case MeshingFix::split_region: return "split_region";
+    case MeshingFix::loop_anchors: return "loop_anchors";
+    case MeshingFix::polygon_anchor: return "polygon_anchor";
+    case MeshingFix::duplicate_chord: return "duplicate_chord";
+    case MeshingFix::fallback_triangulation: return "fallback_triangulation";
+    case MeshingFix::anchor_position: return "anchor_position";
+    case MeshingFix::flip_anchor: return "flip_anchor";
+    case MeshingFix::flipped_triangles: return "flipped_triangles";
+    case MeshingFix::skipped_region: return "skipped_region";
+    case MeshingFix::split_curved: return "split_curved";
+    case MeshingFix::solid_component: return "solid_component";
+  }
+  return "?";
+}
+
+}  // namespace meshcvt
