@@ -11,4 +11,6 @@ mkdir -p out
 ./build/meshcvt info data/sample-elephant.off
 ./build/meshcvt cluster data/sample-elephant.off -n 300 -o out/elephant-clusters.ply \
   --labels out/elephant-labels.txt --report out/elephant-cluster-report.json
-echo "outputs in out/: elephant-clusters.ply (open in MeshLab: faces colored by cluster), labels, report"
+./build/meshcvt coarsen data/sample-elephant.off -n 300 -o out/elephant-coarse.obj \
+  --report out/elephant-coarsen-report.json
+echo "outputs in out/: elephant-clusters.ply (open in MeshLab: faces colored by cluster), labels, report; elephant-coarse.obj (300 vertices)"
