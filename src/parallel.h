@@ -5,6 +5,9 @@
 
 #include <condition_variable>
 #include <cstddef>
+#include <cstdint>
+#include <exception>
+#include <system_error>
 #include <functional>
 #include <mutex>
 #include <thread>
@@ -39,5 +42,33 @@ class WorkerPool {
   bool stop_ = false;
   std::exception_ptr error_;
 };
+
+// One-shot alternative to WorkerPool for a single parallel pass with uneven ranges (topology,
+// subdivision): runs fn(begin, end, part) for the ranges [bounds[p], bounds[p+1]), part 0 on the calling thread,
+// and rethrows the first exception (e.g. bad_alloc) after every thread has finished.
+template <class Fn>
+void run_ranges(const std::vector<uint32_t>& bounds, const Fn& fn) {
+  size_t parts = bounds.size() - 1;
+  std::vector<std::exception_ptr> errors(parts);
+  auto guarded = [&](size_t p) {
+    try {
+      fn(bounds[p], bounds[p + 1], p);
+    } catch (...) {
+      errors[p] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> threads;
+  for (size_t p = 1; p < parts; ++p) {
+    try {
+      threads.emplace_back(guarded, p);
+    } catch (const std::system_error&) {
+      guarded(p);  // no thread to be had: do that part here
+    }
+  }
+  if (parts > 0) guarded(0);
+  for (auto& t : threads) t.join();
+  for (auto& e : errors)
+    if (e) std::rethrow_exception(e);
+}
 
 }  // namespace meshcvt

@@ -4,6 +4,7 @@
 // half-edge), so the half-edges of an edge end up next to each other without a hash table; a run of
 // equal keys is one edge and gets one new vertex. Vertex ranges are split over two threads with the
 // new vertex ids handed out per range after a count, so the result does not depend on the split.
+#include "parallel.h"
 #include "meshcvt/subdivide.h"
 
 #include <algorithm>
@@ -26,32 +27,6 @@ constexpr uint64_t kMaxVertices = 0xfffffffeu;      // below kNone
 
 inline uint32_t next_half_edge(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
 
-// Runs fn(begin, end, part) for the ranges [bounds[p], bounds[p+1]), part 0 on the calling thread,
-// and rethrows the first exception (e.g. bad_alloc) after every thread has finished.
-template <class Fn>
-void run_ranges(const std::vector<uint32_t>& bounds, const Fn& fn) {
-  size_t parts = bounds.size() - 1;
-  std::vector<std::exception_ptr> errors(parts);
-  auto guarded = [&](size_t p) {
-    try {
-      fn(bounds[p], bounds[p + 1], p);
-    } catch (...) {
-      errors[p] = std::current_exception();
-    }
-  };
-  std::vector<std::thread> threads;
-  for (size_t p = 1; p < parts; ++p) {
-    try {
-      threads.emplace_back(guarded, p);
-    } catch (const std::system_error&) {
-      guarded(p);  // no thread to be had: do that part here
-    }
-  }
-  if (parts > 0) guarded(0);
-  for (auto& t : threads) t.join();
-  for (auto& e : errors)
-    if (e) std::rethrow_exception(e);
-}
 
 // Splits [0, count) into ranges of about equal weight, weight given by the CSR `offsets`.
 std::vector<uint32_t> split_by_offsets(const std::vector<uint32_t>& offsets, size_t count, bool parallel) {

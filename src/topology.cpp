@@ -12,6 +12,7 @@
 //
 // While building, face_adjacent holds two extra marks (non-manifold edge, boundary edge already
 // walked) next to kNone (boundary edge); they become kNone before returning.
+#include "parallel.h"
 #include "meshcvt/topology.h"
 
 #include <algorithm>
@@ -47,32 +48,6 @@ inline bool is_collapsed(const uint32_t* indices, size_t f) {
 inline uint32_t next_half_edge(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
 inline uint32_t prev_half_edge(uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
 
-// Runs fn(begin, end, part) for the ranges [bounds[p], bounds[p+1]), part 0 on the calling thread,
-// and rethrows the first exception (e.g. bad_alloc) after every thread has finished.
-template <class Fn>
-void run_ranges(const std::vector<uint32_t>& bounds, const Fn& fn) {
-  size_t parts = bounds.size() - 1;
-  std::vector<std::exception_ptr> errors(parts);
-  auto guarded = [&](size_t p) {
-    try {
-      fn(bounds[p], bounds[p + 1], p);
-    } catch (...) {
-      errors[p] = std::current_exception();
-    }
-  };
-  std::vector<std::thread> threads;
-  for (size_t p = 1; p < parts; ++p) {
-    try {
-      threads.emplace_back(guarded, p);
-    } catch (const std::system_error&) {
-      guarded(p);  // no thread to be had: do that part here
-    }
-  }
-  if (parts > 0) guarded(0);
-  for (auto& t : threads) t.join();
-  for (auto& e : errors)
-    if (e) std::rethrow_exception(e);
-}
 
 // Vertex ranges with about the same number of incident faces each, so both threads get equal work.
 std::vector<uint32_t> split_vertices(const Topology& t, size_t vertex_count, unsigned parts) {
