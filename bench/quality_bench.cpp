@@ -225,7 +225,7 @@ int main(int argc, char** argv) {
   if (argc > 2) {
     Mesh coarse = load(argv[2]);
     std::printf("coarse %s: %zu faces\n", argv[2], coarse.face_count());
-    for (uint64_t samples : {uint64_t(0), uint64_t(100000)}) {
+    for (uint64_t samples : {uint64_t(0), uint64_t(100000), uint64_t(2000000)}) {
       t = Timer();
       ApproximationError e = approximation_error(coarse, mesh, samples);
       std::printf(

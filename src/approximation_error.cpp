@@ -22,7 +22,7 @@ namespace meshcvt {
 namespace {
 
 constexpr uint64_t kMinSamples = 100'000;
-constexpr uint64_t kMaxSamples = 2'000'000;
+constexpr uint64_t kMaxSamples = 1'000'000;
 constexpr size_t kChunk = 4096;  // points per work item; fixed, so sums do not depend on threads
 
 // splitmix64's output function: a counter-based generator, so sample k is a function of (seed, k)

@@ -229,10 +229,13 @@ TEST_CASE("approximation_error: meshes without a face or without area are reject
   CHECK_THROWS_AS(meshcvt::approximation_error(octahedron(), flat, 1000), meshcvt::OptionError);
 }
 
-TEST_CASE("default_error_samples: at least 100k, the larger face count, capped") {
+TEST_CASE("default_error_samples: the larger face count, at least 100k, at most 1M") {
   Mesh small = octahedron();
   CHECK(meshcvt::default_error_samples(small, small) == 100000);
   Mesh big = grid(300, 0, 1, 0, 1, 0);  // 180,000 faces
   CHECK(meshcvt::default_error_samples(small, big) == 180000);
   CHECK(meshcvt::default_error_samples(big, small) == 180000);
+  Mesh huge;  // only the face count matters: 1.5M (unreferenced) faces
+  huge.indices.assign(3 * 1'500'000, 0);
+  CHECK(meshcvt::default_error_samples(small, huge) == 1000000);
 }

@@ -121,7 +121,7 @@ const RegisterCommand reg(60, [](CLI::App& app) {
                   "the reference's bounding-box diagonal");
   sub->add_option("--samples", a->samples,
                   "area-uniform samples per surface for --ref (default: the larger face count, at least 100000, "
-                  "at most 2000000); every vertex is measured too")
+                  "at most 1000000); every vertex is measured too")
       ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000)));
   sub->add_option("--seed", a->seed, "seed of the sample positions (default 1)");
   sub->add_option("--threads", a->threads, "worker threads, 0 = all cores (the result does not depend on it)");

@@ -59,7 +59,7 @@ struct ApproximationError {
 };
 
 /// Default number of area-uniform samples per surface for approximation_error: the larger face
-/// count of the two meshes, at least 100,000 and at most 2,000,000. The time grows linearly with
+/// count of the two meshes, at least 100,000 and at most 1,000,000. The time grows linearly with
 /// the samples while the sampled RMS settles in the third or fourth digit (bench/RESULTS.md).
 uint64_t default_error_samples(const Mesh& a, const Mesh& ref);
 
