@@ -259,7 +259,7 @@ uint32_t make_disk_regions(const Mesh& mesh, const Topology& topology, const Fac
   const uint32_t nf = uint32_t(labels.size());
   std::vector<uint32_t> vertex_stamp(mesh.vertex_count(), 0), face_stamp(nf, 0);
   uint32_t stamp = 0;
-  std::vector<uint32_t> queue, pending_regions, leftover;
+  std::vector<uint32_t> queue;
 
   // Lowest face of every region (collapsed faces take part in nothing).
   std::vector<uint32_t> first_face(regions, kNone);
@@ -291,7 +291,7 @@ uint32_t make_disk_regions(const Mesh& mesh, const Topology& topology, const Fac
     return stamp;
   };
 
-  // Faces of a region (after a split, of the region being regrown) not reached by the growth.
+  // Faces of every region, CSR.
   std::vector<uint32_t> region_faces;
   std::vector<uint32_t> face_offsets(size_t(regions) + 1, 0);
   for (uint32_t f = 0; f < nf; ++f) ++face_offsets[labels[f] + 1];
