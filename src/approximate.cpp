@@ -98,9 +98,8 @@ constexpr uint32_t kMaxDynamicProgramming = 1024;
 constexpr double kMinFacingCosine = 1e-6;
 // Triangles whose smallest angle has a smaller sine are slivers (collinear anchors): never chosen.
 constexpr double kMinSine = 1e-6;
-// Same as cluster(): repair rounds and stall detection of the boundary iteration.
+// Same as cluster(): repair rounds of the boundary iteration (stalls: run_iterations).
 constexpr uint32_t kMaxRepairRounds = 8;
-constexpr uint32_t kStallLimit = 16;
 // Teleport attempts after a clustering (each costs a boundary iteration to convergence); the loop
 // stops earlier at the first attempt that does not lower the distortion.
 constexpr uint32_t kMaxTeleports = 32;
@@ -1341,33 +1340,13 @@ ClusterOptions cluster_options(const ApproximateOptions& o, uint32_t clusters) {
   return c;
 }
 
-// Boundary iterations until no face moves, max_iterations or a stall (as cluster()).
-bool iterate(BoundaryIteration& it, const ApproximateOptions& o, uint32_t round, Clustering& out) {
-  double best = it.energy();
-  uint32_t stalled = 0;
-  for (uint32_t i = 0; i < o.max_iterations; ++i) {
-    IterationRecord r = it.step();
-    r.round = round;
-    out.history.push_back(r);
-    ++out.iterations;
-    if (o.progress) o.progress(ClusterProgress{"iterate", out.iterations, r.moves});
-    if (r.moves == 0) return true;
-    if (r.energy < best) {
-      best = r.energy;
-      stalled = 0;
-    } else if (++stalled >= kStallLimit) {
-      return false;
-    }
-  }
-  return false;
-}
 
 // Iterate + repair rounds from the iteration's current labels, as cluster() does. Returns the next
 // free round number.
 uint32_t converge(BoundaryIteration& it, const ClusterProblem& problem, const Topology& topology,
                   const ApproximateOptions& o, uint32_t round, Clustering& out) {
   for (uint32_t repairs = 0;; ++repairs, ++round) {
-    out.converged = iterate(it, o, round, out);
+    out.converged = run_iterations(it, o.max_iterations, o.progress, round, out);
     std::vector<uint32_t> current = it.labels();
     std::vector<float> generators = it.generators();
     bool repaired = repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair);

@@ -22,20 +22,22 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 // Rounds of repair + iterate before giving up on a perfectly valid result (repair alone still makes
 // every cluster connected; see cluster()).
 constexpr uint32_t kMaxRepairRounds = 8;
+}  // namespace
+
 // Energy that has not decreased for this many iterations with faces still moving means float round-off
 // is trading faces back and forth: stop rather than spin until max_iterations.
 constexpr uint32_t kStallLimit = 16;
 
-// Runs iterations until no face moves (true), max_iterations, or a stall (false).
-bool iterate(IterationEngine& it, const ClusterOptions& options, uint32_t round, Clustering& out) {
+bool run_iterations(IterationEngine& it, uint32_t max_iterations,
+                    const std::function<void(const ClusterProgress&)>& progress, uint32_t round, Clustering& out) {
   double best = it.energy();
   uint32_t stalled = 0;
-  for (uint32_t i = 0; i < options.max_iterations; ++i) {
+  for (uint32_t i = 0; i < max_iterations; ++i) {
     IterationRecord r = it.step();
     r.round = round;
     out.history.push_back(r);
     ++out.iterations;
-    if (options.progress) options.progress(ClusterProgress{"iterate", out.iterations, r.moves});
+    if (progress) progress(ClusterProgress{"iterate", out.iterations, r.moves});
     if (r.moves == 0) return true;
     if (r.energy < best) {
       best = r.energy;
@@ -46,8 +48,6 @@ bool iterate(IterationEngine& it, const ClusterOptions& options, uint32_t round,
   }
   return false;
 }
-
-}  // namespace
 
 Clustering cluster(const Mesh& mesh, const ClusterOptions& options) {
   return cluster(mesh, build_topology(mesh), options);
@@ -82,7 +82,7 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
   double iterate_s = 0, repair_s = 0;
   for (uint32_t round = 0;; ++round) {
     t = Clock::now();
-    out.converged = iterate(it, options, round, out);
+    out.converged = run_iterations(it, options.max_iterations, options.progress, round, out);
     iterate_s += seconds_since(t);
 
     t = Clock::now();

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -133,6 +134,12 @@ class BoundaryIteration final : public IterationEngine {
 /// edge-connected without it, and the destination's faces in that ring edge-connected.
 bool move_keeps_disks(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels, uint32_t face,
                       uint32_t destination);
+
+/// Runs iterations until no face moves (returns true), `max_iterations`, or a stall (energy not
+/// decreasing for 16 iterations while faces still move: float round-off trading faces; false).
+/// Appends each IterationRecord (tagged with `round`) to out.history and counts out.iterations.
+bool run_iterations(IterationEngine& it, uint32_t max_iterations,
+                    const std::function<void(const ClusterProgress&)>& progress, uint32_t round, Clustering& out);
 
 /// Connectivity repair of Section 5.3 (split clusters keep their largest piece, the other pieces go
 /// to the closest adjacent cluster; clusters enclosed by a single other cluster are dissolved).

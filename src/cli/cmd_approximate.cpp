@@ -126,10 +126,7 @@ void run_approximate(ApproximateArgs& a) {
   options.max_iterations = a.max_iter;
   bool progress = !a.quiet && stderr_is_terminal();
   if (progress)
-    options.progress = [](const ClusterProgress& p) {
-      std::fprintf(stderr, "\r%-8s iteration %5u  moves %10llu", p.phase, p.iteration, (unsigned long long)p.moves);
-      std::fflush(stderr);
-    };
+    options.progress = print_progress;
 
   auto t0 = Clock::now();
   ReadOptions ro;

@@ -73,10 +73,7 @@ void run_cluster(const ClusterArgs& a) {
   options.device = a.device;
   bool progress = !a.quiet && stderr_is_terminal();
   if (progress)
-    options.progress = [](const ClusterProgress& p) {
-      std::fprintf(stderr, "\r%-8s iteration %5u  moves %10llu", p.phase, p.iteration, (unsigned long long)p.moves);
-      std::fflush(stderr);
-    };
+    options.progress = print_progress;
 
   auto t0 = Clock::now();
   ReadOptions ro;

@@ -6,6 +6,8 @@
 
 #include <string>
 
+#include "meshcvt/cluster.h"
+
 namespace meshcvt::cli {
 
 /// Registers a subcommand; `order` sorts them in --help. Use at namespace scope:
@@ -16,6 +18,10 @@ struct RegisterCommand {
 
 /// True when stderr is a terminal (progress lines are shown only then).
 bool stderr_is_terminal();
+
+/// Progress line on stderr ("\rPHASE iteration N moves M"), for ClusterOptions::progress when
+/// stderr is a terminal.
+void print_progress(const ClusterProgress& progress);
 
 /// Appends the --device option (auto|cpu|gpu|gpu:N) to a subcommand.
 void add_device_option(CLI::App* sub, std::string& device);

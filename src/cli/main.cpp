@@ -25,6 +25,11 @@ RegisterCommand::RegisterCommand(int order, void (*add)(CLI::App& app)) { regist
 
 bool stderr_is_terminal() { return isatty(STDERR_FILENO) == 1; }
 
+void print_progress(const ClusterProgress& p) {
+  std::fprintf(stderr, "\r%-8s iteration %5u  moves %10llu", p.phase, p.iteration, (unsigned long long)p.moves);
+  std::fflush(stderr);
+}
+
 void add_device_option(CLI::App* sub, std::string& device) {
   sub->add_option("--device", device,
                   "auto | cpu | gpu | gpu:N (default: $MESHCVT_DEVICE, else auto: a discrete or "
