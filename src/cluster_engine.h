@@ -127,6 +127,27 @@ class BoundaryIteration final : public IterationEngine {
   std::vector<std::vector<uint32_t>> worker_moves_;
   std::vector<std::vector<uint32_t>> worker_rings_;  // vertex rings of proposals: size, then faces
   std::vector<uint64_t> worker_evaluated_;
+
+
+  // Margin accelerator (exact; see cluster_iterate.cpp): a face that decided to stay is re-tested
+  // only once one of the generators it read has moved, in total, by its budget. Watches are kept
+  // per cluster in buckets of budgets within a factor of 2; a bucket is flushed (all its faces
+  // re-tested) once its cluster moved by the bucket's lower bound since its last flush.
+  struct Watch {
+    uint32_t face, stamp;
+  };
+  void register_watches();
+  void purge_watches();
+  std::vector<double> movement_;                  // per cluster: total distance its generator moved
+  std::vector<std::vector<Watch>> watches_;       // per cluster and budget level
+  std::vector<double> flushed_at_;                // per cluster and level: movement_ at its last flush
+  std::vector<uint32_t> level_mask_;              // per cluster: bit L set when level L holds watches
+  std::vector<uint32_t> eval_stamp_;              // per face: iteration of its last test (0: none)
+  std::vector<float> budget_;                     // per face: its budget from that test
+  std::vector<uint8_t> watch_count_;              // per face: live watches of that test
+  std::vector<std::vector<uint32_t>> worker_stayed_;  // faces tested this iteration that stay
+  uint32_t iteration_ = 0;
+  size_t watch_entries_ = 0, live_watches_ = 0;
 };
 
 /// The disk tests (a) and (b) of the topology-preserving filter: moving `face` from its cluster to

@@ -24,11 +24,21 @@
 //     independent of the order and of the thread count. Generators are recomputed from the sums.
 //
 // Accelerator (5.2), exact: a face's decision depends only on its label, its edge-neighbours'
-// labels and those clusters' generators. A face is re-tested only if one of these changed in the
-// last iteration, or its own proposal was refused; otherwise it would decide "stay" again. The list
-// of border faces is kept up to date around moved faces (the paper's "potential edges").
+// labels and those clusters' generators. A face is re-tested when a label it reads changed in the
+// last iteration (moved faces and their neighbours: the paper's "potential edges"), when its own
+// proposal was refused, or when a generator it reads has moved far enough to change its decision.
+// For the last, beyond the paper's "cluster changed" test: a face that decides to stay gets a
+// budget b, the largest generator displacement that provably cannot flip any comparison of the
+// four-case rule it made (each float distance bounded through the triangle inequality, with a
+// relative allowance for float rounding far above the few roundings involved), and it is re-tested
+// only once one of its clusters' generators has moved by b in total since its test. Clusters keep
+// their total movement and their watching faces in buckets of budgets within a factor of 2 (a
+// bucket is re-tested whole, a little early for some faces, never late), so an iteration touches
+// only the faces that may be due, not every border face of every cluster that moved. Same
+// decisions as testing every border face every iteration (`accelerate = false`); the tests check.
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 #include <cstring>
 #include <string>
 
@@ -156,6 +166,68 @@ bool ring_keeps_disks(const Topology& topology, const std::vector<uint32_t>& lab
   return mask_is_connected(adjacent, in_source) && mask_is_connected(adjacent, in_destination);
 }
 
+// Level L >= 1 holds budgets in [2^(L-32), 2^(L-31)), level 0 the smaller ones (normalized units).
+constexpr int kBudgetLevels = 32;
+
+// Relative error allowed on every float distance and weighted sum the rule compares: each is a few
+// roundings of 2^-24 away from its exact value, far below this.
+constexpr double kRoundoff = 1e-6;
+
+// One side of a comparison: sum of w_i * d_i over up to two terms (d_i float distances).
+struct RuleSide {
+  double w[2], d[2];
+  int n;
+};
+
+// The largest b such that, if every generator moves by less than b, the comparison a < b... that
+// holds now, side_a < side_b, still holds after the float evaluation; 0 when it is too close to call.
+// A distance d from a generator that moves by at most b is bounded by (sqrt(d) +- b)^2 (triangle
+// inequality), widened by kRoundoff for float rounding before and after.
+double comparison_budget(const RuleSide& a, const RuleSide& b) {
+  const double up = (1 + kRoundoff) * (1 + kRoundoff), down = (1 - kRoundoff) * (1 - kRoundoff);
+  double upper_a = 0, weight_a = 0, root_sum_a = 0, lower_b = 0, root_sum_b = 0;
+  for (int i = 0; i < a.n; ++i) {
+    double r = std::sqrt(a.d[i] / (1 - kRoundoff));
+    upper_a += a.w[i] * r * r;
+    weight_a += a.w[i];
+    root_sum_a += a.w[i] * r;
+  }
+  for (int i = 0; i < b.n; ++i) {
+    double r = std::sqrt(b.d[i] / (1 + kRoundoff));
+    lower_b += b.w[i] * r * r;
+    root_sum_b += b.w[i] * r;
+  }
+  double slack = down * lower_b - up * upper_a;
+  if (!(slack > 0)) return 0;
+  // growth of the bounds for a displacement t: up (2 t root_sum_a + t^2 weight_a) + down 2 t root_sum_b
+  double qa = up * weight_a, qc = 2 * (up * root_sum_a + down * root_sum_b);
+  if (qa == 0 && qc == 0) return 1e30;  // weightless: nothing can change
+  double t = 2 * slack / (qc + std::sqrt(qc * qc + 4 * qa * slack));
+  return t * (1 - kRoundoff);
+}
+
+// Budget of a face that stays for one cluster edge (f in V_p, g in V_q): the smallest displacement
+// of the generators of p or q that could make this edge move it. Same argument order as
+// decide_cluster_edge; `face_is_left` says which of the edge's faces is the one staying.
+double stay_budget(float d_lp, float d_lq, float d_rp, float d_rq, float w_l, float w_r, bool face_is_left) {
+  auto single = [](float d) { return RuleSide{{1, 0}, {d, 0}, 1}; };
+  const RuleSide in_p{{w_l, w_r}, {d_lp, d_rp}, 2}, in_q{{w_l, w_r}, {d_lq, d_rq}, 2};
+  const bool left_stays = d_lp <= d_lq, right_stays = d_rp >= d_rq;
+  const float both_in_p = d_lp * w_l + d_rp * w_r, both_in_q = d_lq * w_l + d_rq * w_r;
+  const bool pair_in_p = both_in_p < both_in_q;
+  double budget = 0;
+  if (face_is_left) {  // the left face stays iff left_stays || (!right_stays && pair_in_p)
+    if (left_stays) budget = comparison_budget(single(d_lp), single(d_lq));
+    if (!right_stays && pair_in_p)
+      budget = std::max(budget, std::min(comparison_budget(single(d_rp), single(d_rq)), comparison_budget(in_p, in_q)));
+  } else {  // the right face stays iff right_stays || (!left_stays && !pair_in_p)
+    if (right_stays) budget = comparison_budget(single(d_rq), single(d_rp));
+    if (!left_stays && !pair_in_p)
+      budget = std::max(budget, std::min(comparison_budget(single(d_lq), single(d_lp)), comparison_budget(in_q, in_p)));
+  }
+  return budget;
+}
+
 }  // namespace
 
 BoundaryIteration::BoundaryIteration(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology,
@@ -189,6 +261,77 @@ void BoundaryIteration::reset(std::vector<uint32_t> labels) {
   worker_moves_.assign(pool_.size(), {});
   worker_rings_.assign(pool_.size(), {});
   worker_evaluated_.assign(pool_.size(), 0);
+  worker_stayed_.assign(pool_.size(), {});
+  movement_.assign(nc, 0.0);
+  watches_.assign(accelerate_ ? size_t(nc) * kBudgetLevels : 0, {});
+  flushed_at_.assign(accelerate_ ? size_t(nc) * kBudgetLevels : 0, 0.0);
+  level_mask_.assign(accelerate_ ? nc : 0, 0);
+  eval_stamp_.assign(accelerate_ ? nf : 0, 0);
+  budget_.assign(accelerate_ ? nf : 0, 0.0f);
+  watch_count_.assign(accelerate_ ? nf : 0, 0);
+  iteration_ = 0;
+  watch_entries_ = live_watches_ = 0;
+}
+
+namespace {
+// The budget level of a face: the largest L with 2^(L - kBudgetLevels) <= budget (0: below 2^-31).
+int budget_level(float budget) {
+  if (!(budget > 0)) return 0;
+  int level = std::ilogb(budget) + kBudgetLevels;
+  return std::clamp(level, 0, kBudgetLevels - 1);
+}
+double level_threshold(int level) { return level == 0 ? 0.0 : std::ldexp(1.0, level - kBudgetLevels); }
+}  // namespace
+
+// The faces tested this iteration that stay get one watch per cluster they read (their own and
+// each neighbouring one), at that cluster's movement plus their budget.
+void BoundaryIteration::register_watches() {
+  for (auto& stayed : worker_stayed_) {
+    for (uint32_t f : stayed) {
+      live_watches_ -= watch_count_[f];  // the watches of its previous test are stale now
+      uint32_t clusters[4];
+      int count = 0;
+      clusters[count++] = labels_[f];
+      for (int e = 0; e < 3; ++e) {
+        uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
+        if (o == kNone) continue;
+        uint32_t q = labels_[o];
+        bool seen = false;
+        for (int k = 0; k < count; ++k) seen |= clusters[k] == q;
+        if (!seen) clusters[count++] = q;
+      }
+      const int level = budget_level(budget_[f]);
+      for (int k = 0; k < count; ++k) {
+        std::vector<Watch>& bucket = watches_[size_t(clusters[k]) * kBudgetLevels + level];
+        if (bucket.empty()) {
+          // An empty bucket's clock starts now: every face in it was registered since.
+          flushed_at_[size_t(clusters[k]) * kBudgetLevels + level] = movement_[clusters[k]];
+          level_mask_[clusters[k]] |= uint32_t(1) << level;
+        }
+        bucket.push_back(Watch{f, eval_stamp_[f]});
+      }
+      watch_count_[f] = uint8_t(count);
+      live_watches_ += size_t(count);
+      watch_entries_ += size_t(count);
+    }
+    stayed.clear();
+  }
+  if (watch_entries_ > 2 * live_watches_ + problem_.face_count / 8 + 1024) purge_watches();
+}
+
+// Drops the watches of faces tested again since (they have newer ones or moved).
+void BoundaryIteration::purge_watches() {
+  watch_entries_ = 0;
+  for (std::vector<Watch>& bucket : watches_) {
+    bucket.erase(
+        std::remove_if(bucket.begin(), bucket.end(), [&](const Watch& w) { return eval_stamp_[w.face] != w.stamp; }),
+        bucket.end());
+    watch_entries_ += bucket.size();
+  }
+  for (uint32_t c = 0; c < problem_.clusters; ++c)
+    for (uint32_t levels = level_mask_[c]; levels; levels &= levels - 1)
+      if (watches_[size_t(c) * kBudgetLevels + __builtin_ctz(levels)].empty())
+        level_mask_[c] &= ~(uint32_t(1) << __builtin_ctz(levels));
 }
 
 std::string BoundaryIteration::description() const {
@@ -247,7 +390,30 @@ void BoundaryIteration::collect_active_faces() {
     return;
   }
   for (uint32_t f : dirty_faces_) add(f);
-  for (uint32_t c : changed_clusters_) scan(c, true);
+  if (iteration_ == 1) {  // first iteration after reset: every border face
+    for (uint32_t c = 0; c < problem_.clusters; ++c) scan(c, false);
+    return;
+  }
+  // Buckets whose cluster moved by their lower bound since their last flush: a face in the bucket
+  // was registered after that flush with a budget at least the bound, so none is re-tested late.
+  for (uint32_t c : changed_clusters_) {
+    const double moved = movement_[c];
+    for (uint32_t levels = level_mask_[c]; levels; levels &= levels - 1) {
+      const int level = __builtin_ctz(levels);
+      const size_t slot = size_t(c) * kBudgetLevels + level;
+      std::vector<Watch>& bucket = watches_[slot];
+      if (!(moved - flushed_at_[slot] >= level_threshold(level)) || moved == flushed_at_[slot]) continue;
+      level_mask_[c] &= ~(uint32_t(1) << level);
+      watch_entries_ -= bucket.size();
+      for (const Watch& w : bucket) {
+        if (eval_stamp_[w.face] != w.stamp) continue;  // tested again since: stale
+        --live_watches_;
+        --watch_count_[w.face];
+        add(w.face);
+      }
+      bucket.clear();
+    }
+  }
 }
 
 void BoundaryIteration::evaluate_range(size_t begin, size_t end, unsigned worker) {
@@ -255,6 +421,7 @@ void BoundaryIteration::evaluate_range(size_t begin, size_t end, unsigned worker
   const float* weight = problem_.weight.data();
   const float* gen = generators_.data();
   std::vector<uint32_t>& moves = worker_moves_[worker];
+  std::vector<uint32_t>& stayed = worker_stayed_[worker];
   uint64_t evaluated = 0;
   for (size_t i = begin; i < end; ++i) {
     uint32_t f = active_[i];
@@ -267,6 +434,7 @@ void BoundaryIteration::evaluate_range(size_t begin, size_t end, unsigned worker
     float d_own = squared_distance(xf, gen + 3 * size_t(p));
     float best_d = 0;
     uint32_t best = kNone;
+    double budget = 1e30;
     for (int e = 0; e < 3; ++e) {
       uint32_t g = adj[e];
       if (g == kNone) continue;
@@ -285,11 +453,21 @@ void BoundaryIteration::evaluate_range(size_t begin, size_t end, unsigned worker
         best = q;
         best_d = d_fq;
       }
+      if (accelerate_ && best == kNone)
+        budget = std::min(budget, f < g ? stay_budget(d_own, d_fq, d_gp, d_gq, weight[f], weight[g], true)
+                                        : stay_budget(d_gq, d_gp, d_fq, d_own, weight[g], weight[f], false));
     }
+    if (accelerate_) eval_stamp_[f] = iteration_;
     if (best != kNone) {
       destination_[f] = best;
       proposal_state_[f] = kProposed;
       moves.push_back(f);
+    } else if (accelerate_) {
+      // Rounded down to float, so the watch never fires late.
+      float b = float(budget);
+      if (double(b) > budget) b = std::nextafter(b, 0.0f);
+      budget_[f] = b;
+      stayed.push_back(f);
     }
   }
   worker_evaluated_[worker] += evaluated;
@@ -308,10 +486,17 @@ IterationRecord BoundaryIteration::step() {
   for (auto& m : worker_moves_) m.clear();
 
   // 1. gather proposals
+  ++iteration_;
   collect_active_faces();
   pool_.run(active_.size(), [&](size_t b, size_t e, unsigned w) { evaluate_range(b, e, w); });
+  if (accelerate_) register_watches();
   std::vector<uint32_t> proposals;
   for (auto& m : worker_moves_) proposals.insert(proposals.end(), m.begin(), m.end());
+  if (accelerate_)
+    for (uint32_t f : proposals) {  // tested again: the watches of its previous test are stale
+      live_watches_ -= watch_count_[f];
+      watch_count_[f] = 0;
+    }
   for (uint64_t n : worker_evaluated_) record.evaluated_faces += n;
 
   // 2. disk filter
@@ -409,8 +594,13 @@ IterationRecord BoundaryIteration::step() {
       if (o != kNone) touch(o);
     }
   }
-  for (uint32_t c : changed_clusters_)
-    compute_generator(problem_, &sums_[size_t(c) * kSumComponents], &generators_[3 * size_t(c)]);
+  for (uint32_t c : changed_clusters_) {
+    float* g = &generators_[3 * size_t(c)];
+    const float old[3] = {g[0], g[1], g[2]};
+    compute_generator(problem_, &sums_[size_t(c) * kSumComponents], g);
+    double dx = double(g[0]) - old[0], dy = double(g[1]) - old[1], dz = double(g[2]) - old[2];
+    movement_[c] += std::sqrt(dx * dx + dy * dy + dz * dz);
+  }
   record.energy = energy();
   return record;
 }
