@@ -4,6 +4,9 @@
 
 #include <chrono>
 #include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <system_error>
 
 #include "meshcvt/error.h"
 #include "vk_context.h"
@@ -108,6 +111,23 @@ DeviceChoice resolve(const Request& request, const std::vector<DeviceInfo>& devi
   return cpu_choice();
 }
 
+// Whether the machine may have a hardware GPU: a DRM render node (Mesa's and AMD/Intel drivers),
+// NVIDIA's device nodes, or WSL's /dev/dxg. $MESHCVT_PROBE_VULKAN=1 skips the check (e.g. a
+// container that hides /dev but forwards a GPU some other way). Outside Linux: always true.
+bool gpu_device_node_present() {
+#ifdef __linux__
+  if (const char* force = std::getenv("MESHCVT_PROBE_VULKAN"); force && std::string(force) == "1") return true;
+  std::error_code ec;
+  for (const char* node : {"/dev/nvidiactl", "/dev/nvidia0", "/dev/dxg"})
+    if (std::filesystem::exists(node, ec)) return true;
+  for (const auto& entry : std::filesystem::directory_iterator("/dev/dri", ec))
+    if (entry.path().filename().string().rfind("renderD", 0) == 0) return true;
+  return false;
+#else
+  return true;
+#endif
+}
+
 }  // namespace
 
 std::vector<DeviceInfo> list_devices() {
@@ -127,6 +147,10 @@ DeviceChoice resolve_device(const std::string& request) {
   const Request parsed = parse_request(request);
   if (parsed.kind == Request::cpu) return cpu_choice();
   if (parsed.kind == Request::automatic) {
+    // Loading the Vulkan loader and its drivers costs ~25-100 ms and tens of MB (lavapipe pulls in
+    // LLVM), a large part of a small job. "auto" only ever picks a hardware GPU, and on Linux every
+    // hardware GPU driver exposes a device node; without one the answer is the CPU engine.
+    if (!gpu_device_node_present()) return cpu_choice();
     std::vector<DeviceInfo> devices;
     try {
       devices = list_devices();

@@ -65,7 +65,9 @@ struct DeviceChoice {
 ///              A CPU-type Vulkan device (lavapipe) is never chosen by "auto", only when asked for.
 ///              When it falls back because there is no Vulkan loader, no device, or a GPU that is
 ///              not usable, `notice` says so in one line; a machine with only CPU-type devices
-///              falls back silently.
+///              falls back silently. On Linux, a machine without a GPU device node (/dev/dri/renderD*,
+///              /dev/nvidia*, /dev/dxg) falls back silently without loading Vulkan at all (it
+///              costs 25-100 ms); $MESHCVT_PROBE_VULKAN=1 probes anyway.
 ///   other   -> OptionError listing the accepted forms (naming $MESHCVT_DEVICE when it came from there).
 DeviceChoice resolve_device(const std::string& request);
 
