@@ -59,8 +59,18 @@ double cluster_energy(const ClusterProblem& problem, const int64_t sums[kSumComp
 double labeling_energy(const ClusterProblem& problem, const std::vector<uint32_t>& labels, uint32_t clusters);
 
 /// Initial clustering: exactly `clusters` connected clusters (Section 5.1 or seeded growth).
+/// component_clusters (optional, ClusterOptions::component_clusters, already validated): exactly
+/// that many clusters in each component, numbered component by component for hierarchical.
+/// Null or empty: the original scheme over the whole mesh.
 std::vector<uint32_t> initial_clustering(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology,
-                                         Init init, uint32_t clusters, uint64_t seed);
+                                         Init init, uint32_t clusters, uint64_t seed,
+                                         const std::vector<uint32_t>* component_clusters = nullptr);
+
+/// Lloyd steps by constrained flooding (cluster_flood.cpp): at most `max_steps`, each kept only if it
+/// lowers the energy, stopping once a step gains less than `min_relative_gain` of the energy.
+/// Clusters stay non-empty and connected. Returns the number of steps kept.
+uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topology, WorkerPool& pool,
+                           std::vector<uint32_t>& labels, uint32_t max_steps, double min_relative_gain);
 
 /// One engine running the boundary-testing iteration: the CPU's BoundaryIteration below, or the
 /// GPU's (host/). Both must take exactly the same decisions; the driver in cluster.cpp does the rest
@@ -169,10 +179,13 @@ bool repair_connectivity(const ClusterProblem& problem, const Topology& topology
                          std::vector<uint32_t>& labels, uint32_t clusters, RepairStats& stats);
 
 /// Re-creates empty clusters by splitting the clusters of highest energy in two connected halves.
+/// cluster_component (optional, `clusters` entries): the mesh component each cluster belongs to;
+/// an empty cluster is then re-created by splitting the highest-energy cluster of its own
+/// component, so per-component counts are kept. Null: any cluster may be split.
 /// Returns the number of clusters re-created.
 uint32_t restore_cluster_count(const ClusterProblem& problem, const Topology& topology,
                                const std::vector<float>& generators, std::vector<uint32_t>& labels,
-                               uint32_t clusters);
+                               uint32_t clusters, const std::vector<uint32_t>* cluster_component = nullptr);
 
 /// Checks the final guarantees: every face labeled, every cluster non-empty and connected, and (when
 /// avoidable) adjacent to at least two clusters. Returns counts of violations.

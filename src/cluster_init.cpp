@@ -19,6 +19,9 @@
 //
 // Random: seeded region growing (one seed per mesh component first, the rest uniformly at random,
 // grown breadth-first), for comparison.
+//
+// With per-component counts (ClusterOptions::component_clusters) both run component by component,
+// so each component gets exactly its count.
 #include <algorithm>
 #include <cassert>
 #include <cstring>
@@ -162,9 +165,14 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
   return relabel;
 }
 
+// Clusters the faces listed in `subset` (increasing face ids, a union of whole components) into
+// `clusters` clusters; node i of the graph is face subset[i] and local_of[subset[i]] == i. Returns a
+// label per listed face. A null subset means every face, node i = face i (local_of unused).
 std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, const Topology& topology,
-                                              uint32_t clusters) {
-  const uint32_t nf = problem.face_count;
+                                              uint32_t clusters, const std::vector<uint32_t>* subset = nullptr,
+                                              const std::vector<uint32_t>* local_of = nullptr) {
+  const uint32_t nf = subset ? uint32_t(subset->size()) : problem.face_count;
+  auto face_of = [&](uint32_t node) { return subset ? (*subset)[node] : node; };
   std::vector<uint32_t> labels(nf);
   std::iota(labels.begin(), labels.end(), 0u);
   if (clusters >= nf) return labels;
@@ -174,15 +182,18 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
   g.weight.resize(nf);
   g.sum.resize(3 * size_t(nf));
   for (uint32_t f = 0; f < nf; ++f) {
-    double w = problem.weight[f];
+    uint32_t face = face_of(f);
+    double w = problem.weight[face];
     g.weight[f] = w;
-    for (int c = 0; c < 3; ++c) g.sum[3 * size_t(f) + c] = w * double(problem.point[3 * size_t(f) + c]);
+    for (int c = 0; c < 3; ++c) g.sum[3 * size_t(f) + c] = w * double(problem.point[3 * size_t(face) + c]);
   }
   g.edges.reserve(size_t(nf) * 3 / 2);
   for (uint32_t f = 0; f < nf; ++f)
     for (int e = 0; e < 3; ++e) {
-      uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
-      if (o != kNone && o > f) g.edges.push_back(DualEdge{f, o});
+      uint32_t o = topology.face_adjacent[3 * size_t(face_of(f)) + e];
+      if (o == kNone) continue;
+      if (subset) o = (*local_of)[o];  // a neighbour is in the same component, so in the subset
+      if (o > f) g.edges.push_back(DualEdge{f, o});
     }
 
   // Level targets: n·2^k, n·2^(k-1), ..., n with n·2^k < F <= n·2^(k+1).
@@ -261,10 +272,82 @@ std::vector<uint32_t> random_clustering(const ClusterProblem& problem, const Top
   return labels;
 }
 
+// Per-component counts: component c gets component_clusters[c] clusters.
+// Hierarchical: the scheme above on each component alone, component c's ids following those of
+// components 0..c-1. Random: one seed per component as above, then each component's remaining
+// seeds uniformly among its own free faces, grown breadth-first (growth never leaves a component).
+std::vector<uint32_t> per_component_clustering(const ClusterProblem& problem, const Topology& topology, Init init,
+                                               const std::vector<uint32_t>& component_clusters, uint64_t seed) {
+  const uint32_t nf = problem.face_count, nc = topology.component_count;
+  // faces of each component, CSR, in increasing face id; local_of[f] = position within its component
+  std::vector<uint32_t> offsets(size_t(nc) + 1, 0), faces(nf), local_of(nf);
+  for (uint32_t f = 0; f < nf; ++f) ++offsets[topology.face_component[f] + 1];
+  for (uint32_t c = 0; c < nc; ++c) offsets[c + 1] += offsets[c];
+  {
+    std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
+    for (uint32_t f = 0; f < nf; ++f) {
+      uint32_t c = topology.face_component[f];
+      local_of[f] = fill[c] - offsets[c];
+      faces[fill[c]++] = f;
+    }
+  }
+  std::vector<uint32_t> labels(nf, kNone);
+  if (init == Init::hierarchical) {
+    uint32_t base = 0;
+    std::vector<uint32_t> subset;
+    for (uint32_t c = 0; c < nc; ++c) {
+      subset.assign(faces.begin() + offsets[c], faces.begin() + offsets[c + 1]);
+      std::vector<uint32_t> local = hierarchical_clustering(problem, topology, component_clusters[c], &subset, &local_of);
+      for (size_t i = 0; i < subset.size(); ++i) labels[subset[i]] = base + local[i];
+      base += component_clusters[c];
+    }
+    return labels;
+  }
+  uint64_t rng = seed;
+  std::vector<uint32_t> queue;
+  queue.reserve(nf);
+  uint32_t next = 0;
+  // One random face per component first (reservoir sampling, as random_clustering does).
+  std::vector<uint32_t> component_size(nc, 0), component_pick(nc, kNone);
+  for (uint32_t f = 0; f < nf; ++f) {
+    uint32_t c = topology.face_component[f];
+    if (splitmix64(rng) % ++component_size[c] == 0) component_pick[c] = f;
+  }
+  for (uint32_t c = 0; c < nc; ++c) {
+    labels[component_pick[c]] = next++;
+    queue.push_back(component_pick[c]);
+  }
+  std::vector<uint32_t> free_faces;
+  for (uint32_t c = 0; c < nc; ++c) {
+    free_faces.clear();
+    for (uint32_t i = offsets[c]; i < offsets[c + 1]; ++i)
+      if (labels[faces[i]] == kNone) free_faces.push_back(faces[i]);
+    for (uint32_t i = 0; i + 1 < component_clusters[c]; ++i) {
+      size_t j = i + splitmix64(rng) % (free_faces.size() - i);
+      std::swap(free_faces[i], free_faces[j]);
+      labels[free_faces[i]] = next++;
+      queue.push_back(free_faces[i]);
+    }
+  }
+  for (size_t head = 0; head < queue.size(); ++head) {
+    uint32_t f = queue[head];
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
+      if (o != kNone && labels[o] == kNone) {
+        labels[o] = labels[f];
+        queue.push_back(o);
+      }
+    }
+  }
+  assert(queue.size() == nf);
+  return labels;
+}
+
 }  // namespace
 
 std::vector<uint32_t> initial_clustering(const ClusterProblem& problem, const Mesh& /*mesh*/, const Topology& topology,
-                                         Init init, uint32_t clusters, uint64_t seed) {
+                                         Init init, uint32_t clusters, uint64_t seed,
+                                         const std::vector<uint32_t>* component_clusters) {
   if (clusters == 0) throw OptionError("the number of clusters must be at least 1");
   if (clusters > problem.face_count)
     throw OptionError("cannot make " + std::to_string(clusters) + " clusters from " +
@@ -273,6 +356,8 @@ std::vector<uint32_t> initial_clustering(const ClusterProblem& problem, const Me
     throw OptionError("cannot make " + std::to_string(clusters) + " connected clusters: the mesh has " +
                       std::to_string(topology.component_count) +
                       " connected components (across manifold edges), each needs at least one cluster");
+  if (component_clusters && !component_clusters->empty())
+    return per_component_clustering(problem, topology, init, *component_clusters, seed);
   return init == Init::hierarchical ? hierarchical_clustering(problem, topology, clusters)
                                     : random_clustering(problem, topology, clusters, seed);
 }

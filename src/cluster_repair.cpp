@@ -9,10 +9,12 @@
 // situation cannot be avoided.
 //
 // Restore: empty clusters are re-created by splitting the clusters of highest energy in two
-// connected halves grown breadth-first from two far-apart faces.
+// connected halves grown breadth-first from two far-apart faces (with per-component cluster counts,
+// the cluster split is one of the emptied cluster's own mesh component).
 #include <algorithm>
 #include <cassert>
 #include <numeric>
+#include <utility>
 
 #include "boundary_rule.h"
 #include "cluster_engine.h"
@@ -161,7 +163,8 @@ bool repair_connectivity(const ClusterProblem& problem, const Topology& topology
 
 uint32_t restore_cluster_count(const ClusterProblem& problem, const Topology& topology,
                                const std::vector<float>& generators, std::vector<uint32_t>& labels,
-                               uint32_t clusters) {
+                               uint32_t clusters, const std::vector<uint32_t>* cluster_component) {
+  assert(!cluster_component || cluster_component->size() == clusters);
   const uint32_t nf = problem.face_count;
   uint32_t restored = 0;
   for (;;) {
@@ -183,30 +186,63 @@ uint32_t restore_cluster_count(const ClusterProblem& problem, const Topology& to
     std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
       return energy[a] != energy[b] ? energy[a] > energy[b] : a < b;
     });
-    size_t splits = std::min(order.size(), empty.size());
-    if (splits == 0) return restored;  // cannot happen while clusters <= faces
+    // Pairs (cluster to split, empty cluster to fill): the i-th highest energy with the i-th empty;
+    // per component when asked, so an empty cluster comes back in the component it was lost from.
+    std::vector<std::pair<uint32_t, uint32_t>> pairs;
+    if (!cluster_component) {
+      for (size_t s = 0; s < std::min(order.size(), empty.size()); ++s) pairs.push_back({order[s], empty[s]});
+    } else {
+      std::vector<uint8_t> taken(order.size(), 0);
+      for (uint32_t e : empty) {
+        for (size_t i = 0; i < order.size(); ++i) {
+          if (taken[i] || (*cluster_component)[order[i]] != (*cluster_component)[e]) continue;
+          taken[i] = 1;
+          pairs.push_back({order[i], e});
+          break;
+        }
+      }
+    }
+    // Empty: cannot happen while every component has at least as many faces as clusters.
+    if (pairs.empty()) return restored;
     // faces of each cluster, CSR
     std::vector<uint32_t> offsets(size_t(clusters) + 1, 0), faces(nf);
     for (uint32_t c = 0; c < clusters; ++c) offsets[c + 1] = offsets[c] + size[c];
     std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
     for (uint32_t f = 0; f < nf; ++f) faces[fill[labels[f]]++] = f;
     std::vector<uint32_t> queue;
-    for (size_t s = 0; s < splits; ++s) {
-      uint32_t c = order[s], fresh = empty[s];
+    for (auto [c, fresh] : pairs) {
       const uint32_t* members = &faces[offsets[c]];
       uint32_t count = size[c];
-      // seed a: farthest from the generator; seed b: farthest from a (ties: lower face id)
-      uint32_t a = members[0], b = kNone;
+      // seed a: farthest from the generator; seed b: farthest from a (ties: lower face id). Both
+      // are taken among the faces on c's border with other clusters when it has any: halves grown
+      // from two border faces both reach the border, so neither ends up enclosed by the other. (A
+      // cluster covering a protrusion, a cap and a band around it, split from its tip and its
+      // far rim would give back the cap enclosed by the band, an isolated cluster that repair
+      // dissolves again, round after round.)
+      auto on_border = [&](uint32_t f) {
+        for (int e = 0; e < 3; ++e) {
+          uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
+          if (o != kNone && labels[o] != c) return true;
+        }
+        return false;
+      };
+      bool any_border = false;
+      for (uint32_t i = 0; i < count && !any_border; ++i) any_border = on_border(members[i]);
+      uint32_t a = kNone, b = kNone;
       float da = -1, db = -1;
       for (uint32_t i = 0; i < count; ++i) {
+        if (any_border && !on_border(members[i])) continue;
         float d = squared_distance(&problem.point[3 * size_t(members[i])], &generators[3 * size_t(c)]);
         if (d > da) da = d, a = members[i];
       }
       for (uint32_t i = 0; i < count; ++i) {
-        if (members[i] == a) continue;
+        if (members[i] == a || (any_border && !on_border(members[i]))) continue;
         float d = squared_distance(&problem.point[3 * size_t(members[i])], &problem.point[3 * size_t(a)]);
         if (d > db) db = d, b = members[i];
       }
+      if (b == kNone)  // a single border face: any other face of c
+        for (uint32_t i = 0; i < count && b == kNone; ++i)
+          if (members[i] != a) b = members[i];
       assert(b != kNone);
       // Two-source breadth-first growth inside c (its faces marked kNone while unclaimed); b's half
       // becomes the fresh cluster. Faces not reached (c was not connected) stay in c.

@@ -16,7 +16,7 @@ namespace {
 
 struct ClusterArgs {
   std::string input, output, labels, report, metric = "cvt", init = "hierarchical", topology = "preserving", device;
-  uint32_t clusters = 0, max_iter = 1000;
+  uint32_t clusters = 0, max_iter = 1000, lloyd_steps = 16;
   unsigned threads = 0;
   uint64_t seed = 1;
   bool quiet = false, no_weld = false, no_accelerate = false;
@@ -40,7 +40,7 @@ void write_report(const ClusterArgs& a, const Mesh& mesh, const Clustering& c, c
   j.value("input", a.input).value("format", rs.format).value("faces", uint64_t(mesh.face_count()))
       .value("vertices", uint64_t(mesh.vertex_count()));
   j.begin_object("options").value("clusters", a.clusters).value("metric", a.metric).value("init", a.init)
-      .value("topology", a.topology).value("max_iterations", a.max_iter).value("accelerate", !a.no_accelerate)
+      .value("topology", a.topology).value("max_iterations", a.max_iter).value("accelerate", !a.no_accelerate).value("lloyd_steps", a.lloyd_steps)
       .value("threads", a.threads).value("seed", a.seed).end_object();
   j.value("device", c.device).value("iterations", c.iterations).value("converged", c.converged);
   j.value("energy_initial", c.history.front().energy).value("energy_final", c.history.back().energy);
@@ -68,6 +68,7 @@ void run_cluster(const ClusterArgs& a) {
   options.topology = parse_topology_mode(a.topology);
   options.max_iterations = a.max_iter;
   options.accelerate = !a.no_accelerate;
+  options.lloyd_steps = a.lloyd_steps;
   options.threads = a.threads;
   options.seed = a.seed;
   options.device = a.device;
@@ -116,6 +117,7 @@ const RegisterCommand reg(20, [](CLI::App& app) {
   sub->add_option("--max-iter", a->max_iter, "maximum iterations per round (default 1000)");
   sub->add_option("--threads", a->threads, "worker threads, 0 = all cores (the result does not depend on it)");
   sub->add_option("--seed", a->seed, "seed for --init random");
+  sub->add_option("--lloyd-steps", a->lloyd_steps, "at most this many Lloyd steps after initialization (default 16, 0 = none)");
   sub->add_flag("--no-accelerate", a->no_accelerate, "test every border face every iteration (same result, slower)");
   sub->add_flag("--no-weld", a->no_weld, "do not merge vertices with identical positions");
   sub->add_option("--labels", a->labels, "also write one cluster id per line, in the input's face order");

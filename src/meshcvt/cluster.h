@@ -53,12 +53,30 @@ struct ClusterOptions {
   TopologyMode topology = TopologyMode::preserving;
   uint32_t max_iterations = 1000;  ///< per round of iteration; the loop also ends when no face moves
   bool accelerate = true;          ///< Section 5.2: skip settled cluster edges (exact: same result)
+  /// After initialization (not with initial_labels): at most this many Lloyd steps, each moving every
+  /// border to the bisector of the current generators at once (a constrained flood, see
+  /// cluster_flood.cpp), kept only while they lower the energy and stopped once one gains < 0.5%.
+  /// They do the long-range work that would take boundary testing one face layer per iteration;
+  /// 0 leaves the initialization as the paper has it.
+  uint32_t lloyd_steps = 16;
   unsigned threads = 0;            ///< 0: every core. The result does not depend on it.
   uint64_t seed = 1;               ///< for Init::random
   /// "auto", "cpu", "gpu" or "gpu:N". Empty: $MESHCVT_DEVICE, else "auto".
   std::string device;
   /// Optional per-face density rho_k (face_count entries, > 0); empty means 1 everywhere.
   std::vector<float> density;
+  /// Optional: how many clusters each connected component of the face graph gets (indexed like
+  /// Topology::face_component; component_count entries, each >= 1 and <= the component's faces,
+  /// summing to `clusters`). Initialization puts exactly that many in each component and restoring n
+  /// after repair re-creates a lost cluster inside the component that lost it, so every component
+  /// ends with exactly its count. Empty: initialization decides (at least one per component).
+  std::vector<uint32_t> component_clusters;
+  /// Optional: start from these labels (face_count entries in [0, clusters)) instead of
+  /// initializing; `init` and `seed` are then unused. A label's faces must lie in one component;
+  /// labels need not be connected or all used (repair and restore make exactly n connected
+  /// clusters). With component_clusters, each component must hold at most its count of labels
+  /// (unused labels are given to the components short of their count, in component order).
+  std::vector<uint32_t> initial_labels;
   /// Called after each iteration (from the calling thread). May be empty.
   std::function<void(const ClusterProgress&)> progress;
 };
@@ -102,7 +120,8 @@ struct Clustering {
 
 /// Clusters the faces of `mesh` into exactly options.clusters connected clusters.
 /// Throws OptionError when n = 0, n > faces, or n < number of connected components (the message
-/// names the numbers), DeviceError when a GPU was asked for and cannot run.
+/// names the numbers), when component_clusters or initial_labels do not fit the mesh as documented
+/// above, DeviceError when a GPU was asked for and cannot run.
 Clustering cluster(const Mesh& mesh, const ClusterOptions& options);
 
 /// Same, reusing a topology already built for `mesh`.

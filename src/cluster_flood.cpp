@@ -1,0 +1,241 @@
+// meshcvt: Lloyd steps by constrained flooding, between the hierarchical initialization (Fan et al.
+// Section 5.1) and the boundary-testing iteration (Section 3.1).
+//
+// Why: boundary testing moves a cluster border by at most one face per iteration, so a generator
+// that must travel k faces needs k iterations, and the iteration count grows with the number of
+// faces per cluster. One Lloyd step (Lloyd 1982; on meshes with connectivity kept by a flood, as in
+// the partitioning step of Cohen-Steiner, Alliez, Desbrun, "Variational Shape Approximation", 2004)
+// moves every border to the bisector of the current generators at once. A few such steps bring the
+// clustering close to a CVT in O(F log F) each; the boundary iteration then only polishes.
+//
+// One step: every cluster's seed is its face closest to its generator; the seeds grow in order of
+// increasing distance d(face, generator) through the dual graph (a priority queue, ties by face
+// then cluster id, so the result is deterministic), each face taken by the first cluster to reach
+// it. Clusters stay non-empty (the seeds are placed first) and connected (grown through edges). A
+// step is kept only if it lowers the energy, so the energy never rises before the iteration starts.
+#include <algorithm>
+#include <cassert>
+
+#include "boundary_rule.h"
+#include "cluster_engine.h"
+#include "parallel.h"
+
+namespace meshcvt {
+
+namespace {
+
+double total_energy(const ClusterProblem& problem, const std::vector<int64_t>& sums, const std::vector<float>& generators) {
+  double e = 0;
+  for (uint32_t c = 0; c < problem.clusters; ++c)
+    e += cluster_energy(problem, &sums[size_t(c) * kSumComponents], &generators[3 * size_t(c)]);
+  return e;
+}
+
+std::vector<float> generators_of(const ClusterProblem& problem, const std::vector<int64_t>& sums) {
+  std::vector<float> g(3 * size_t(problem.clusters), 0.0f);
+  for (uint32_t c = 0; c < problem.clusters; ++c) compute_generator(problem, &sums[size_t(c) * kSumComponents], &g[3 * c]);
+  return g;
+}
+
+// One Lloyd step from `generators`, writing the new labels to `out`:
+//  1. every face takes the closest generator among its cluster and the clusters adjacent to it
+//     (a generator moves by less than a cluster's width per step, so the closest one is nearly
+//     always among these; the energy check below catches the rest); ties to the lower cluster id;
+//  2. every cluster keeps the edge-connected piece holding its face closest to its generator;
+//  3. faces of the other pieces go, in breadth-first order from the kept pieces (faces in id
+//     order), to the cluster of the neighbour that reaches them first.
+// Returns false when a cluster would end up empty (the step is then not used).
+bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const std::vector<uint32_t>& labels,
+                  const std::vector<float>& generators, WorkerPool& pool, std::vector<uint32_t>& out) {
+  const uint32_t nf = problem.face_count, nc = problem.clusters;
+  const float* point = problem.point.data();
+  const uint32_t* adjacent = topology.face_adjacent.data();
+  auto distance = [&](uint32_t f, uint32_t c) { return squared_distance(point + 3 * size_t(f), &generators[3 * size_t(c)]); };
+
+  // Cluster adjacency in CSR form from the cluster edges: counted, filled, then each cluster's
+  // short list sorted and deduplicated (a global sort of the edge pairs costs more than a step).
+  std::vector<uint32_t> offsets(nc + 1, 0);
+  auto for_each_cluster_edge = [&](auto&& fn) {
+    for (uint32_t f = 0; f < nf; ++f)
+      for (int e = 0; e < 3; ++e) {
+        uint32_t g = adjacent[3 * size_t(f) + e];
+        if (g != kNone && labels[g] != labels[f]) fn(labels[f], labels[g]);
+      }
+  };
+  for_each_cluster_edge([&](uint32_t a, uint32_t) { ++offsets[a + 1]; });
+  for (uint32_t c = 0; c < nc; ++c) offsets[c + 1] += offsets[c];
+  std::vector<uint32_t> neighbours(offsets[nc]), fill(offsets.begin(), offsets.end() - 1);
+  for_each_cluster_edge([&](uint32_t a, uint32_t b) { neighbours[fill[a]++] = b; });
+  std::vector<uint32_t> count(nc, 0);
+  for (uint32_t c = 0; c < nc; ++c) {
+    auto begin = neighbours.begin() + offsets[c], end = neighbours.begin() + offsets[c + 1];
+    std::sort(begin, end);
+    count[c] = uint32_t(std::unique(begin, end) - begin);
+  }
+
+  // A face closer to its own generator than half the distance to the nearest adjacent generator
+  // cannot be closer to another (triangle inequality): most faces need one distance. The bound is
+  // shrunk a little so float rounding cannot turn a tie into a skip.
+  std::vector<float> inner_radius2(nc, 0.0f);
+  for (uint32_t c = 0; c < nc; ++c) {
+    float nearest = -1;
+    for (uint32_t k = offsets[c]; k < offsets[c] + count[c]; ++k) {
+      float d = squared_distance(&generators[3 * size_t(c)], &generators[3 * size_t(neighbours[k])]);
+      if (nearest < 0 || d < nearest) nearest = d;
+    }
+    inner_radius2[c] = nearest < 0 ? 0.0f : 0.25f * nearest * 0.999f;
+  }
+
+  out.resize(nf);
+  pool.run(nf, [&](size_t begin, size_t end, unsigned) {
+    for (size_t f = begin; f < end; ++f) {
+      uint32_t own = labels[f], best = own;
+      float best_d = distance(uint32_t(f), own);
+      if (best_d < inner_radius2[own]) {
+        out[f] = own;
+        continue;
+      }
+      for (uint32_t k = offsets[own]; k < offsets[own] + count[own]; ++k) {
+        uint32_t c = neighbours[k];
+        float d = distance(uint32_t(f), c);
+        if (better_destination(d, c, best_d, best)) {
+          best = c;
+          best_d = d;
+        }
+      }
+      out[f] = best;
+    }
+  });
+
+  // Seeds: each cluster's face closest to its generator.
+  std::vector<uint32_t> seed(nc, kNone);
+  std::vector<float> seed_distance(nc, 0.0f);
+  for (uint32_t f = 0; f < nf; ++f) {
+    uint32_t c = out[f];
+    float d = distance(f, c);
+    if (seed[c] == kNone || d < seed_distance[c]) {
+      seed[c] = f;
+      seed_distance[c] = d;
+    }
+  }
+  // A generator nearest to no face (a badly placed cluster) keeps the face of its old cluster
+  // closest to it, so every cluster stays non-empty.
+  bool empty = false;
+  for (uint32_t c = 0; c < nc; ++c) empty |= seed[c] == kNone;
+  if (empty) {
+    std::vector<uint32_t> old_seed(nc, kNone);
+    std::vector<float> old_distance(nc, 0.0f);
+    for (uint32_t f = 0; f < nf; ++f) {
+      uint32_t c = labels[f];
+      float d = distance(f, c);
+      if (old_seed[c] == kNone || d < old_distance[c]) {
+        old_seed[c] = f;
+        old_distance[c] = d;
+      }
+    }
+    for (uint32_t c = 0; c < nc; ++c)
+      if (seed[c] == kNone) out[old_seed[c]] = c;
+    std::fill(seed.begin(), seed.end(), kNone);
+    for (uint32_t f = 0; f < nf; ++f) {
+      uint32_t c = out[f];
+      float d = distance(f, c);
+      if (seed[c] == kNone || d < seed_distance[c]) {
+        seed[c] = f;
+        seed_distance[c] = d;
+      }
+    }
+    for (uint32_t c = 0; c < nc; ++c)
+      if (seed[c] == kNone) return false;  // a forced face was another cluster's only one
+  }
+
+  // Keep each cluster's piece around its seed; the rest become orphans (kNone).
+  std::vector<uint8_t> kept(nf, 0);
+  std::vector<uint32_t> queue;
+  queue.reserve(nf);
+  for (uint32_t c = 0; c < nc; ++c) {
+    kept[seed[c]] = 1;
+    queue.push_back(seed[c]);
+  }
+  for (size_t head = 0; head < queue.size(); ++head) {
+    uint32_t f = queue[head];
+    for (int e = 0; e < 3; ++e) {
+      uint32_t g = adjacent[3 * size_t(f) + e];
+      if (g != kNone && !kept[g] && out[g] == out[f]) {
+        kept[g] = 1;
+        queue.push_back(g);
+      }
+    }
+  }
+  if (queue.size() == nf) return true;
+  // Orphans: breadth-first from the kept faces next to them, in face order.
+  queue.clear();
+  for (uint32_t f = 0; f < nf; ++f) {
+    if (!kept[f]) continue;
+    for (int e = 0; e < 3; ++e) {
+      uint32_t g = adjacent[3 * size_t(f) + e];
+      if (g != kNone && !kept[g]) {
+        queue.push_back(f);
+        break;
+      }
+    }
+  }
+  for (size_t head = 0; head < queue.size(); ++head) {
+    uint32_t f = queue[head];
+    for (int e = 0; e < 3; ++e) {
+      uint32_t g = adjacent[3 * size_t(f) + e];
+      if (g != kNone && !kept[g]) {
+        kept[g] = 1;
+        out[g] = out[f];
+        queue.push_back(g);
+      }
+    }
+  }
+  // Faces not reachable through manifold edges from any kept face keep their old label.
+  for (uint32_t f = 0; f < nf; ++f)
+    if (!kept[f]) out[f] = labels[f];
+  return true;
+}
+
+}  // namespace
+
+uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topology, WorkerPool& pool,
+                           std::vector<uint32_t>& labels, uint32_t max_steps, double min_relative_gain) {
+  if (problem.clusters == 0 || max_steps == 0) return 0;
+  std::vector<int64_t> sums = compute_cluster_sums(problem, labels, problem.clusters);
+  std::vector<float> generators = generators_of(problem, sums);
+  double energy = total_energy(problem, sums, generators);
+  const uint32_t isolated = check_clusters(topology, labels, problem.clusters).isolated;
+  std::vector<uint32_t> next;
+  uint32_t kept = 0;
+  for (uint32_t step = 0; step < max_steps; ++step) {
+    if (!voronoi_step(problem, topology, labels, generators, pool, next)) break;
+    // A cluster enclosed by one other (the other an annulus around it) would stay so under the
+    // topology-preserving iteration until repair dissolves it; such a step is not taken.
+    if (check_clusters(topology, next, problem.clusters).isolated > isolated) break;
+    // Sums by the centroid variations of the faces that changed cluster (eq. 8), as the
+    // iteration does: exact integers, and far fewer faces than a recount.
+    std::vector<int64_t> next_sums = sums;
+    int64_t v[kSumComponents];
+    for (uint32_t f = 0; f < problem.face_count; ++f) {
+      if (next[f] == labels[f]) continue;
+      problem.face_fixed(f, v);
+      for (int k = 0; k < kSumComponents; ++k) {
+        next_sums[size_t(labels[f]) * kSumComponents + k] -= v[k];
+        next_sums[size_t(next[f]) * kSumComponents + k] += v[k];
+      }
+    }
+    std::vector<float> next_generators = generators_of(problem, next_sums);
+    double next_energy = total_energy(problem, next_sums, next_generators);
+    if (!(next_energy < energy)) break;
+    double gain = (energy - next_energy) / energy;
+    labels.swap(next);
+    sums.swap(next_sums);
+    generators.swap(next_generators);
+    energy = next_energy;
+    ++kept;
+    if (gain < min_relative_gain) break;
+  }
+  return kept;
+}
+
+}  // namespace meshcvt
