@@ -1,16 +1,21 @@
 // meshcvt CLI: `meshcvt coarsen` — clusters a mesh (CVT or CCVT) and builds the coarse mesh from
 // the clusters (Fan et al. Section 6.1), then measures it (Table 1 columns, distance to the input).
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "cli/command.h"
 #include "cli/json.h"
 #include "meshcvt/cluster.h"
 #include "meshcvt/coarsen.h"
+#include "meshcvt/density.h"
 #include "meshcvt/error.h"
 #include "meshcvt/io.h"
 #include "meshcvt/quality.h"
+#include "meshcvt/subdivide.h"
 #include "meshcvt/topology.h"
 
 namespace meshcvt::cli {
@@ -19,10 +24,57 @@ namespace {
 
 struct CoarsenArgs {
   std::string input, output, report, metric = "cvt", placement = "closest", device;
-  uint32_t clusters = 0;
+  uint32_t clusters = 0, fix_rounds = CoarsenMeshOptions{}.max_fix_rounds;
   unsigned threads = 0;
   bool quiet = false, no_weld = false, no_error = false;
+  double gradation = 0;   ///< --gradation g: curvature-adaptive density (meshcvt/density.h); 0 = uniform
+  std::string subdivide;  ///< --subdivide auto|K: "" = none
 };
+
+// --subdivide: "" -> 0 levels, "0".."6" -> that many, "auto" -> kSubdivideAuto; else OptionError.
+constexpr int kSubdivideAuto = -1;
+int parse_subdivide(const std::string& s) {
+  if (s.empty()) return 0;
+  if (s == "auto") return kSubdivideAuto;
+  if (s.size() == 1 && s[0] >= '0' && s[0] <= '6') return s[0] - '0';
+  throw OptionError("--subdivide must be auto or a number of levels 0..6, not '" + s + "'");
+}
+
+// "cluster_not_disk 2, double_border 1": how many of each kind.
+std::string count_kinds(const std::vector<DualDefect>& defects) {
+  std::string s;
+  for (int k = 0; k <= int(DualDefect::empty_cluster); ++k) {
+    size_t count = 0;
+    for (const DualDefect& d : defects) count += d.kind == k;
+    if (count) s += (s.empty() ? "" : ", ") + std::string(to_string(DualDefect::Kind(k))) + " " + std::to_string(count);
+  }
+  return s;
+}
+
+// "fixes: 9 in 3 rounds (cut: cluster_not_disk 1, double_border 6; move_faces: double_border 2), 19 defects -> 0"
+std::string describe_fixes(const CoarsenMeshResult& job) {
+  std::string s = "fixes: " + std::to_string(job.fixes.size());
+  if (!job.fixes.empty()) {
+    s += " in " + std::to_string(job.fix_rounds) + " round" + (job.fix_rounds == 1 ? "" : "s") + " (";
+    bool first = true;
+    for (CoarsenFix::Action action : {CoarsenFix::cut, CoarsenFix::move_faces}) {
+      std::vector<DualDefect> kinds;
+      for (const CoarsenFix& f : job.fixes)
+        if (f.action == action) kinds.push_back(f.defect);
+      if (kinds.empty()) continue;
+      s += std::string(first ? "" : "; ") + to_string(action) + ": " + count_kinds(kinds);
+      first = false;
+    }
+    s += ")";
+  }
+  s += ", " + std::to_string(job.initial_defects) + " defects -> " + std::to_string(job.coarse.defects.size());
+  if (job.refined_clusters)
+    s += "; clustered at " + std::to_string(job.refined_clusters) + " and merged back (" +
+         std::to_string(job.merged_back) + " merges)";
+  if (job.face_start_components)
+    s += "; " + std::to_string(job.face_start_components) + " components rebuilt from single faces";
+  return s;
+}
 
 void run_coarsen(const CoarsenArgs& a) {
   using Clock = std::chrono::steady_clock;
@@ -34,6 +86,10 @@ void run_coarsen(const CoarsenArgs& a) {
     throw OptionError("coarsen builds an isotropic mesh: use --metric cvt or ccvt (l21 is for `meshcvt approximate`)");
   options.threads = a.threads;
   options.device = a.device;
+  // Checked before reading, so a bad value costs no I/O; options.density is set once the mesh is read.
+  int subdivide = parse_subdivide(a.subdivide);
+  if (!(a.gradation >= 0) || !std::isfinite(a.gradation))
+    throw OptionError("--gradation must be a finite number >= 0, not " + std::to_string(a.gradation));
   CoarsenOptions co;
   co.placement = parse_vertex_placement(a.placement);
   co.threads = a.threads;
@@ -43,12 +99,42 @@ void run_coarsen(const CoarsenArgs& a) {
   ro.weld = !a.no_weld;
   Mesh mesh = read_mesh(a.input, ro);
   double read_s = seconds(t0);
-  Topology topology = build_topology(mesh);
-  Clustering c = cluster(mesh, topology, options);
-  if (!c.device_notice.empty() && !a.quiet) std::fprintf(stderr, "meshcvt: note: %s\n", c.device_notice.c_str());
+  // --subdivide, --gradation (as ACVD): the density is estimated on the input's own faces (a
+  // midpoint subdivision adds no curvature information, and its finer faces would make creases look
+  // sharper) and each subdivided face inherits its parent's: children of f are [f 4^k, (f+1) 4^k).
   t0 = Clock::now();
-  CoarsenResult r = coarsen_clustering(mesh, topology, c.labels, a.clusters, co);
-  double coarsen_s = seconds(t0);
+  const size_t input_faces = mesh.face_count();
+  const unsigned subdivision_levels = subdivide == kSubdivideAuto
+                                          ? subdivision_levels_for(input_faces, a.clusters, 10)
+                                          : unsigned(subdivide);
+  std::vector<float> density;  // empty: uniform
+  if (a.gradation > 0) density = curvature_density(mesh, build_topology(mesh), a.gradation);
+  if (subdivision_levels > 0) {
+    mesh = subdivide_midpoint(mesh, subdivision_levels);
+    if (!density.empty()) {
+      std::vector<float> fine(mesh.face_count());
+      for (size_t f = 0; f < fine.size(); ++f) fine[f] = density[f >> (2 * subdivision_levels)];
+      density = std::move(fine);
+    }
+  }
+  options.density = std::move(density);  // coarsen_mesh weighs both the clusters and the dual with it
+  const double prepare_s = seconds(t0);
+  Topology topology = build_topology(mesh);
+  // The whole job (coarsen_mesh.cpp): clusters per component, clustering, fixes until the dual is a
+  // valid manifold, the dual.
+  CoarsenMeshOptions job_options;
+  job_options.cluster = options;
+  job_options.coarsen = co;
+  job_options.max_fix_rounds = a.fix_rounds;
+  const CoarsenMeshResult job = coarsen_mesh(mesh, topology, job_options);
+  const Clustering& c = job.clustering;
+  const CoarsenResult& r = job.coarse;
+  if (!c.device_notice.empty() && !a.quiet) std::fprintf(stderr, "meshcvt: note: %s\n", c.device_notice.c_str());
+  const double coarsen_s = job.coarsen_seconds;
+  const std::string fix_line = describe_fixes(job);
+  if (job.defects_remain && !a.quiet)
+    std::fprintf(stderr, "meshcvt: warning: %zu defects remain (%s): the output is not a valid manifold\n",
+                 r.defects.size(), count_kinds(r.defects).c_str());
   t0 = Clock::now();
   write_mesh(a.output, r.mesh);
   double write_s = seconds(t0);
@@ -64,6 +150,8 @@ void run_coarsen(const CoarsenArgs& a) {
     j.value("input", a.input).value("faces", uint64_t(mesh.face_count())).value("clusters", a.clusters)
         .value("metric", a.metric).value("placement", a.placement).value("device", c.device)
         .value("iterations", c.iterations).value("converged", c.converged);
+    j.value("input_faces", uint64_t(input_faces)).value("subdivision_levels", subdivision_levels)
+        .value("gradation", a.gradation);
     j.begin_object("output").value("vertices", uint64_t(r.mesh.vertex_count())).value("faces", uint64_t(r.mesh.face_count()))
         .value("euler_characteristic", out_info.euler_characteristic).value("input_euler_characteristic", in_info.euler_characteristic)
         .value("boundary_loops", out_info.boundary_loops).value("input_boundary_loops", in_info.boundary_loops)
@@ -79,12 +167,42 @@ void run_coarsen(const CoarsenArgs& a) {
     for (const DualDefect& d : r.defects)
       j.begin_object().value("kind", to_string(d.kind)).value("cluster", d.cluster).value("other", d.other).end_object();
     j.end_array();
-    j.begin_object("timings_s").value("read", read_s).value("cluster", c.timings.total).value("coarsen", coarsen_s)
+    j.begin_object("fix_loop").value("initial_defects", uint64_t(job.initial_defects))
+        .value("fixes", uint64_t(job.fixes.size())).value("rounds", job.fix_rounds)
+        .value("remaining_defects", uint64_t(r.defects.size())).value("defects_remain", job.defects_remain)
+        .value("refined_clusters", job.refined_clusters).value("merged_back", job.merged_back)
+        .value("face_start_components", job.face_start_components)
+        .value("abandoned_fixes", uint64_t(job.abandoned_fixes)).value("iterations", job.fix_iterations);
+    j.end_object();
+    j.begin_array("fixes");
+    for (const CoarsenFix& f : job.fixes) {
+      j.begin_object().value("round", f.round).value("action", to_string(f.action))
+          .value("defect", to_string(f.defect.kind)).value("clusters", f.clusters);
+      j.begin_array("defect_clusters");
+      for (uint32_t id : {f.defect.cluster, f.defect.other, f.defect.third})
+        if (id != kNone) j.item(id);
+      j.end_array();
+      j.value("cluster", f.cluster);
+      if (f.action == CoarsenFix::cut)
+        j.value("merged_into", f.merged_into).value("freed", f.freed);
+      else
+        j.value("to", f.other).value("faces", f.faces);
+      j.end_object();
+    }
+    j.end_array();
+    j.begin_array("component_clusters");
+    for (uint32_t k : job.allocation.clusters) j.item(k);
+    j.end_array();
+    j.begin_object("timings_s").value("read", read_s).value("subdivide_density", prepare_s)
+        .value("cluster", job.cluster_seconds).value("fix", job.fix_seconds).value("coarsen", coarsen_s)
         .value("write", write_s).end_object();
     j.end_object();
     write_text_file(a.report, j.str());
   }
   if (!a.quiet) {
+    if (subdivision_levels > 0 || a.gradation > 0)
+      std::printf("%s: %zu faces, subdivided %u times -> %zu faces; gradation %g\n", a.input.c_str(), input_faces,
+                  subdivision_levels, mesh.face_count(), a.gradation);
     std::printf("%s: %zu faces -> %zu vertices, %zu triangles (%s, %s placement); chi %lld -> %lld, %llu boundary loops"
                 " -> %llu; %zu defects\n",
                 a.input.c_str(), mesh.face_count(), r.mesh.vertex_count(), r.mesh.face_count(), a.metric.c_str(),
@@ -93,7 +211,9 @@ void run_coarsen(const CoarsenArgs& a) {
     std::printf("quality: min angle %.2f deg, avg min angle %.2f deg, angles < 30: %llu, Q min %.3f, Q avg %.3f",
                 q.min_angle_deg, q.avg_min_angle_deg, (unsigned long long)q.angles_below_30, q.q_min, q.q_avg);
     if (!a.no_error) std::printf("; Hausdorff %.3g%% of the diagonal, RMS %.3g%%", 100 * err.hausdorff_rel, 100 * err.rms_rel);
-    std::printf("\ntime: cluster %.3f s, coarsen %.3f s; wrote %s\n", c.timings.total, coarsen_s, a.output.c_str());
+    std::printf("\n%s\n", fix_line.c_str());
+    std::printf("time: cluster %.3f s, fixes %.3f s, coarsen %.3f s; wrote %s\n", job.cluster_seconds,
+                job.fix_seconds, coarsen_s, a.output.c_str());
   }
 }
 
@@ -106,6 +226,13 @@ const RegisterCommand reg(30, [](CLI::App& app) {
   sub->add_option("-o,--output", a->output, "coarse mesh (.obj .off .ply .stl)")->required();
   sub->add_option("--metric", a->metric, "cvt | ccvt (default cvt)");
   sub->add_option("--vertex", a->placement, "closest (default) | projected | qem: where each cluster's vertex goes");
+  sub->add_option("--gradation", a->gradation,
+                  "curvature-adaptive density: 0 uniform (default), larger = more, smaller triangles where the "
+                  "surface bends (edge length ~ (1 + curvature x diagonal)^(-g/4))");
+  sub->add_option("--subdivide", a->subdivide,
+                  "auto | K (0..6): subdivide the input first, K times or (auto) until it has >= 10 faces per vertex");
+  sub->add_option("--fix-rounds", a->fix_rounds,
+                  "rounds of fixing the clustering where its dual is not a manifold (default 12; 0 = report only)");
   sub->add_option("--threads", a->threads, "worker threads, 0 = all cores");
   sub->add_flag("--no-weld", a->no_weld, "do not merge vertices with identical positions");
   sub->add_flag("--no-error", a->no_error, "skip measuring the distance to the input");

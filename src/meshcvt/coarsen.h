@@ -9,12 +9,15 @@
 //
 // What would make the output non-manifold is reported as DualDefect records naming clusters, so a
 // caller can fix the clustering (split a cluster and iterate again); a mesh is produced regardless.
+// coarsen_mesh (coarsen_mesh.cpp) does the whole job: clusters per component, clustering, a loop
+// that fixes the clustering until it has no defect, the dual.
 #pragma once
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "meshcvt/cluster.h"
 #include "meshcvt/mesh.h"
 #include "meshcvt/topology.h"
 
@@ -137,6 +140,143 @@ std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<ui
 /// centroids.
 std::vector<float> cluster_mass_centroids(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
                                           const std::vector<float>* face_weights = nullptr);
+
+// ---- The whole job: clusters per component, clustering, fixing the clustering, the dual mesh
+// (src/coarsen_mesh.cpp).
+
+/// How the clusters of a coarsening are shared among the connected components of the face graph
+/// (Topology::face_component numbering), so that every component can come out as a valid surface.
+struct ComponentAllocation {
+  std::vector<uint32_t> clusters;  ///< per component; adds up to n
+  /// Per component: the fewest vertices any triangulation of that surface has (so no clustering
+  /// with fewer clusters can give a valid dual). Closed manifold component with Euler
+  /// characteristic chi: Heawood's bound, the least V >= 4 with V^2 - 7V + 6 chi >= 0 (4 for a
+  /// sphere, 7 for a torus), 10 for the orientable genus-2 surface, 8 for the Klein bottle, 9 for
+  /// the non-orientable chi = -1 surface (Jungerman-Ringel, Ringel). Manifold component with b >= 1
+  /// boundary loops: max(3 b, closed(chi + b) - b): every boundary loop needs 3 vertices of its own,
+  /// and coning each loop off with one new vertex must give a valid closed triangulation (3 for a
+  /// disk, 6 for an annulus). A component that is not a manifold (non-manifold vertices): 4 if
+  /// closed, 3 with boundary (nothing is guaranteed for it).
+  std::vector<uint32_t> minimum;
+  std::vector<uint32_t> faces;                 ///< per component
+  std::vector<int64_t> euler_characteristic;   ///< per component, V - E + F
+  std::vector<uint64_t> boundary_loops;        ///< per component
+  std::vector<uint8_t> manifold;               ///< per component: orientable or not, no non-manifold vertex/edge
+};
+
+/// Shares n clusters among the components of `mesh` in proportion to their areas (integral of
+/// sqrt(rho) dA when a per-face density rho is given: the point density of a CVT with density rho in
+/// 2D), never below a component's minimum (see ComponentAllocation) nor above its face count;
+/// largest remainders round, ties to the lower component. Deterministic.
+///
+/// mesh, topology : the input and build_topology(mesh).
+/// n              : clusters in all.
+/// density        : optional rho per face (face_count entries, finite, > 0); nullptr or empty: 1.
+/// Throws OptionError when n is below the sum of the minimums (the message gives both numbers and
+/// the components' needs), when a component has fewer faces than its minimum (subdivide the mesh
+/// first), when n exceeds the face count, or when the density is malformed. O(F + V).
+ComponentAllocation allocate_component_clusters(const Mesh& mesh, const Topology& topology, uint32_t n,
+                                                const std::vector<float>* density = nullptr);
+
+/// One change the fix loop of coarsen_mesh made to the clustering (cluster ids as in that round's
+/// labels).
+struct CoarsenFix {
+  enum Action : uint8_t {
+    /// `cluster` is cut in pieces; for each piece beyond the first, the adjacent pair
+    /// (`merged_into`, `freed`) of the same mesh component is merged (`freed` joining
+    /// `merged_into`) and the piece takes the id `freed`, so the count stays n. One record per
+    /// extra piece.
+    cut,
+    /// `faces` faces of `cluster` that separate the two borders of a double border move to the
+    /// adjacent cluster `other`.
+    move_faces,
+  };
+  Action action = cut;
+  DualDefect defect;              ///< the defect this fix addresses, as found at the start of its round
+  uint32_t cluster = kNone;       ///< cut: the cluster cut; move_faces: the cluster giving the faces
+  uint32_t other = kNone;         ///< move_faces: the cluster receiving them
+  uint32_t merged_into = kNone;   ///< cut
+  uint32_t freed = kNone;         ///< cut
+  uint32_t faces = 0;             ///< move_faces
+  uint32_t round = 0;             ///< fix round, from 1
+  uint32_t clusters = 0;          ///< clusters of the clustering it was made on (n, or refined_clusters)
+};
+
+/// "cut", "move_faces".
+const char* to_string(CoarsenFix::Action a);
+
+struct CoarsenMeshOptions {
+  /// clusters = n (the coarse mesh's vertices), metric (cvt or ccvt), init, device, threads,
+  /// density, progress... component_clusters and initial_labels must be left empty (set here).
+  ClusterOptions cluster;
+  CoarsenOptions coarsen;
+  /// Fix rounds at most per attempt (each attempt: rounds until no defect, see coarsen_mesh);
+  /// 0 = no fixing at all, the defects are reported as coarsen_clustering does.
+  uint32_t max_fix_rounds = 12;
+};
+
+struct CoarsenMeshResult {
+  /// The clustering the coarse mesh is the dual of. Its iteration record (history, iterations,
+  /// converged) is that of the cluster() call that produced it; when the labels come from fix
+  /// rounds without a later iteration, a call with max_iterations = 0 (generators, repair as a
+  /// safety net), so iterations is 0 and converged false.
+  Clustering clustering;
+  CoarsenResult coarse;    ///< the coarse mesh; coarse.defects are the defects that remain (empty when fixed)
+  ComponentAllocation allocation;
+  std::vector<CoarsenFix> fixes;     ///< every fix of the attempts kept, in order
+  uint32_t fix_rounds = 0;           ///< rounds run, all attempts together (CoarsenFix::round <= this)
+  size_t initial_defects = 0;        ///< defects of the first clustering
+  uint32_t fix_iterations = 0;       ///< boundary-test iterations run after the first clustering, all together
+  /// When the fixes at n could not clean the clustering: the larger count at which a valid
+  /// clustering was made and then merged back to n (merged_back merges); 0 when not used.
+  uint32_t refined_clusters = 0;
+  uint32_t merged_back = 0;
+  /// Components (of at most 20000 faces) still broken after that, rebuilt from one cluster per
+  /// face merged down to their count (their merges are counted in merged_back).
+  uint32_t face_start_components = 0;
+  size_t abandoned_fixes = 0;        ///< fixes made on attempts that were not kept (not in `fixes`)
+  /// Defects are left (coarse.defects): no attempt removed them all; `clustering` is then the one
+  /// with the fewest defects.
+  bool defects_remain = false;
+  double cluster_seconds = 0;  ///< the first cluster() call
+  double fix_seconds = 0;      ///< defect searches, fixes and the fix rounds' cluster() calls
+  double coarsen_seconds = 0;  ///< the final coarsen_clustering
+};
+
+/// Coarsens `mesh` to exactly n = options.cluster.clusters vertices (Fan et al. 6.1) and makes the
+/// clustering valid first, so that its dual is a manifold like the input:
+///  1. allocate_component_clusters shares n among the components (OptionError when n is too small);
+///  2. cluster() with those counts per component (on a single-component mesh: exactly the plain
+///     cluster() result);
+///  3. fix rounds while find_dual_defects finds any, on the labels (no iteration in between):
+///     a double border that a third cluster's face splits in two loses that face to one of the
+///     two; otherwise the cluster a defect names (the non-disk one, the one meeting the boundary in
+///     two arcs, the heavier of a pair, the one of a duplicated triangle with fewest neighbours) is
+///     cut into 2 pieces, or 3 for a ring around a handle, each a connected disk meeting the
+///     boundary in one arc and every neighbour in one border; for each extra piece the adjacent
+///     pair of the same component whose merge raises the CVT energy least
+///     (W_a W_b / (W_a + W_b) |c_a - c_b|^2) and gives a fit cluster is merged, preferring clusters
+///     in no defect. Once valid, cluster() iterates again from the fixed labels
+///     (TopologyMode::preserving, same counts per component) to smooth them; defects it brings back
+///     are fixed by more rounds, else the smoothing is redone in steps that keep the dual valid;
+///  4. components of manifold surfaces still broken: a valid clustering at 2n, 4n, ... 32n (at
+///     least 4 faces per cluster) is merged back to n by merges that keep the dual valid (the link
+///     condition of an edge contraction) and replaces them; then components of at most 20000 faces
+///     still broken are rebuilt from one cluster per face merged down the same way;
+///  5. coarsen_clustering of the clustering with the fewest defects.
+/// Degenerate triangles (geometry, not topology) are not fixed.
+///
+/// Inputs: mesh, topology = build_topology(mesh), options (see CoarsenMeshOptions). Outputs: see
+/// CoarsenMeshResult; coordinates in the input's units, times in seconds.
+/// Guarantees: exactly n clusters and n output vertices, each component holding its allocated
+/// count; when defects_remain is false the dual has no DualDefect, which for a manifold input means
+/// a manifold output with the input's Euler characteristic and boundary loops, every component kept
+/// and every one of the n vertices used. Not guaranteed: that the loop succeeds (defects_remain
+/// says so; measured failures: a small part at its minimum count, open parts with strips narrower
+/// than a cluster); the quality of clusters that were fixed and could not be smoothed afterwards.
+/// Deterministic for any thread count. Throws what allocate_component_clusters and cluster() throw,
+/// and OptionError when options.cluster.component_clusters or initial_labels are set.
+CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const CoarsenMeshOptions& options);
 
 /// Parses "closest", "projected", "qem"; throws OptionError naming the accepted values.
 VertexPlacement parse_vertex_placement(const std::string& s);

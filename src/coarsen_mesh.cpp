@@ -1,0 +1,1458 @@
+// meshcvt: coarsening as one job with a valid result (Fan et al. Section 6.1; API in
+// meshcvt/coarsen.h): clusters shared among the mesh components, the CVT clustering, a loop that
+// fixes the clustering wherever its dual would not be a manifold, then the dual mesh.
+//
+// Why the clustering is fixed, not the mesh: the dual of a clustering is a closed manifold with the
+// input's Euler characteristic when the clusters form a proper cell decomposition of the surface:
+// every cluster a disk meeting the boundary in at most one arc, two clusters sharing at most one
+// border, every cluster with three neighbours or more (with two, the triangle of its two corners
+// comes out twice). Then clusters, borders and corners are the faces, edges and vertices of a map
+// on the surface, V - E + F is the surface's chi, and the dual (corners -> polygons) has the same
+// chi. find_dual_defects names the clusters that break this.
+//
+// Fixes, in rounds (fix_round):
+//  - a double border roughened by the iteration (a face of a third cluster poking between the two)
+//    loses that face to one of the two, when every cluster it changes stays fit;
+//  - otherwise the offending cluster is cut (ClusterCutter) so that every piece is a disk meeting
+//    one arc / sharing one border: in two, or in three for a ring around a handle (two halves of a
+//    ring share two borders). For each extra piece, to keep exactly n clusters, the adjacent pair of
+//    the same component whose merge raises the CVT energy least is merged (MergeFinder); for the cvt
+//    energy that increase is exactly W_a W_b / (W_a + W_b) |c_a - c_b|^2, and the merged cluster
+//    must be fit too. Cuts and merges are scored by RegionCheck (connected, V - E + F = 1, one arc
+//    along the boundary, one border with each neighbour, enough neighbours).
+// The rounds run on the labels without iterating in between: measured on the elephant, iterating
+// after every round undoes the fixes (the energy prefers rings around thin limbs) and never
+// settles, while fix-only rounds converge. Once valid, the iteration smooths the fixed clusters
+// (FixLoop): fully, or if that brings defects back that the rounds cannot remove, in steps that
+// each keep the clustering valid.
+//
+// When the rounds cannot clean a component (a ring around a handle whose two sides touch the same
+// cluster; a small component with no cluster to spare), a valid clustering at 2n, 4n, ... clusters,
+// where the parts are resolved, is merged back to n (merge_down) with merges that keep the dual
+// valid (the link condition of an edge contraction), and replaces that component. Last, a small
+// component may start from one cluster per face (valid on a manifold) merged down the same way.
+// Every stage keeps the labels with the fewest defects, so the job always ends; what cannot be
+// fixed is reported (CoarsenMeshResult::defects_remain).
+//
+// A cut is chosen among candidates: the planes through the mass centroid normal to each principal
+// axis; two halves grown breadth-first from far-apart faces (of the whole cluster, of its faces next
+// to the other cluster of a double border, of its faces on the boundary); for three pieces, sectors
+// around each principal axis, thirds grown from three far-apart faces, and sectors along each
+// border loop of the cluster (what cuts a ring across, from one of its sides to the other).
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <chrono>
+#include <cmath>
+#include <iterator>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <queue>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "meshcvt/coarsen.h"
+#include "meshcvt/error.h"
+
+namespace meshcvt {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+bool is_collapsed(const uint32_t* t) { return t[0] == t[1] || t[1] == t[2] || t[0] == t[2]; }
+
+double face_area(const Mesh& mesh, size_t f) {
+  const float* p[3];
+  for (int k = 0; k < 3; ++k) p[k] = &mesh.positions[3 * size_t(mesh.indices[3 * f + k])];
+  double u[3], w[3];
+  for (int d = 0; d < 3; ++d) {
+    u[d] = double(p[1][d]) - p[0][d];
+    w[d] = double(p[2][d]) - p[0][d];
+  }
+  double c[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+  return 0.5 * std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+}
+
+void check_density(const Mesh& mesh, const std::vector<float>* density) {
+  if (!density || density->empty()) return;
+  if (density->size() != mesh.face_count())
+    throw OptionError("coarsen: the density has " + std::to_string(density->size()) + " entries for " +
+                      std::to_string(mesh.face_count()) + " faces");
+  for (float d : *density)
+    if (!(d > 0) || !std::isfinite(d)) throw OptionError("coarsen: densities must be finite and > 0");
+}
+
+// ---- minimum clusters per component
+
+// Fewest vertices of a triangulated closed surface of Euler characteristic chi: Heawood's bound
+// (3F = 2E and E <= V(V-1)/2 give V^2 - 7V + 6 chi >= 0), attained by every surface but three.
+uint32_t closed_minimum(int64_t chi, bool orientable) {
+  if (orientable && chi == -2) return 10;  // genus 2 (Jungerman & Ringel)
+  if (!orientable && chi == 0) return 8;   // Klein bottle (Franklin)
+  if (!orientable && chi == -1) return 9;  // N3 (Ringel)
+  int64_t v = 4;
+  while (v * v - 7 * v + 6 * chi < 0) ++v;
+  return uint32_t(v);
+}
+
+uint32_t surface_minimum(int64_t chi, uint64_t loops, bool manifold, bool orientable) {
+  if (!manifold) return loops > 0 ? 3 : 4;
+  if (loops == 0) return closed_minimum(chi, orientable);
+  // Coning each loop off with a new vertex gives a closed triangulation of chi + loops.
+  int64_t capped = int64_t(closed_minimum(chi + int64_t(loops), orientable)) - int64_t(loops);
+  return uint32_t(std::max<int64_t>(3 * int64_t(loops), capped));
+}
+
+// Faces, chi, loops and the minimum of every component, each component judged on its own.
+void describe_components(const Mesh& mesh, const Topology& topology, ComponentAllocation& a) {
+  const uint32_t nc = topology.component_count;
+  a.minimum.assign(nc, 0);
+  a.faces.assign(nc, 0);
+  a.euler_characteristic.assign(nc, 0);
+  a.boundary_loops.assign(nc, 0);
+  a.manifold.assign(nc, 0);
+  std::vector<uint32_t> collapsed(nc, 0);
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    uint32_t c = topology.face_component[f];
+    ++a.faces[c];
+    collapsed[c] += is_collapsed(&mesh.indices[3 * f]);
+  }
+  auto fill = [&](uint32_t c, const MeshInfo& info) {
+    a.euler_characteristic[c] = info.euler_characteristic;
+    a.boundary_loops[c] = info.boundary_loops;
+    bool manifold = info.nonmanifold_edges == 0 && info.nonmanifold_vertices == 0 && info.collapsed_faces == 0;
+    a.manifold[c] = manifold;
+    // A component of collapsed faces only (left by welding) has no surface to keep: one cluster.
+    a.minimum[c] = collapsed[c] == a.faces[c] ? 1
+                                               : surface_minimum(info.euler_characteristic, info.boundary_loops,
+                                                                 manifold, info.nonorientable_components == 0);
+  };
+  if (nc == 1) {
+    fill(0, mesh_info(mesh, topology));
+    return;
+  }
+  // Several components: each one copied out and measured alone (O(F + V) in all).
+  std::vector<uint32_t> offsets(size_t(nc) + 1, 0), faces(mesh.face_count());
+  for (size_t f = 0; f < mesh.face_count(); ++f) ++offsets[topology.face_component[f] + 1];
+  for (uint32_t c = 0; c < nc; ++c) offsets[c + 1] += offsets[c];
+  std::vector<uint32_t> cursor(offsets.begin(), offsets.end() - 1);
+  for (size_t f = 0; f < mesh.face_count(); ++f) faces[cursor[topology.face_component[f]]++] = uint32_t(f);
+  std::vector<uint32_t> vertex_map(mesh.vertex_count(), kNone), used;
+  for (uint32_t c = 0; c < nc; ++c) {
+    Mesh part;
+    for (uint32_t i = offsets[c]; i < offsets[c + 1]; ++i)
+      for (int k = 0; k < 3; ++k) {
+        uint32_t v = mesh.indices[3 * size_t(faces[i]) + k];
+        if (vertex_map[v] == kNone) {
+          vertex_map[v] = uint32_t(part.vertex_count());
+          used.push_back(v);
+          part.positions.insert(part.positions.end(), &mesh.positions[3 * size_t(v)], &mesh.positions[3 * size_t(v)] + 3);
+        }
+        part.indices.push_back(vertex_map[v]);
+      }
+    fill(c, mesh_info(part, build_topology(part)));
+    for (uint32_t v : used) vertex_map[v] = kNone;
+    used.clear();
+  }
+}
+
+std::string describe_component(const ComponentAllocation& a, uint32_t c) {
+  std::string s = "component " + std::to_string(c) + " (";
+  if (!a.manifold[c])
+    s += "not a manifold";
+  else if (a.boundary_loops[c] == 0)
+    s += "closed";
+  else
+    s += std::to_string(a.boundary_loops[c]) + " boundary loop" + (a.boundary_loops[c] > 1 ? "s" : "");
+  s += ", Euler characteristic " + std::to_string(a.euler_characteristic[c]) + ")";
+  return s;
+}
+
+// ---- the fix loop
+
+// Components up to this many faces may be rebuilt from one cluster per face when nothing else
+// makes them valid (a priority queue over their faces and a fitness check per merge).
+constexpr uint32_t kMaxFacesPerFaceStart = 20000;
+
+// Per-face data of the fixes, computed once: weight w = rho * area and centroid, input units.
+struct FaceData {
+  std::vector<double> weight;
+  std::vector<double> centroid;  // 3 per face
+};
+
+FaceData face_data(const Mesh& mesh, const std::vector<float>& density) {
+  FaceData d;
+  size_t nf = mesh.face_count();
+  d.weight.resize(nf);
+  d.centroid.resize(3 * nf);
+  for (size_t f = 0; f < nf; ++f) {
+    d.weight[f] = face_area(mesh, f) * (density.empty() ? 1.0 : double(density[f]));
+    for (int k = 0; k < 3; ++k) {
+      double s = 0;
+      for (int c = 0; c < 3; ++c) s += mesh.positions[3 * size_t(mesh.indices[3 * f + c]) + k];
+      d.centroid[3 * f + k] = s / 3;
+    }
+  }
+  return d;
+}
+
+double squared_distance3(const double* a, const double* b) {
+  double x = a[0] - b[0], y = a[1] - b[1], z = a[2] - b[2];
+  return x * x + y * y + z * z;
+}
+
+// A clustering as the fixes see it at the start of a round.
+struct ClusterView {
+  uint32_t clusters = 0;
+  std::vector<uint32_t> offsets, members;          // faces of each cluster, CSR, increasing face ids
+  std::vector<double> weight, centroid;            // W_i and mass centroid (3 per cluster)
+  std::vector<uint32_t> component;                 // mesh component of each cluster
+  std::vector<uint32_t> neighbour_offsets, neighbours;  // adjacent clusters, sorted, CSR
+
+  uint32_t size(uint32_t c) const { return offsets[c + 1] - offsets[c]; }
+  uint32_t valence(uint32_t c) const { return neighbour_offsets[c + 1] - neighbour_offsets[c]; }
+};
+
+ClusterView view_of(const Topology& topology, const FaceData& data, const std::vector<uint32_t>& labels,
+                    uint32_t clusters) {
+  ClusterView v;
+  v.clusters = clusters;
+  const uint32_t nf = uint32_t(labels.size());
+  v.offsets.assign(size_t(clusters) + 1, 0);
+  for (uint32_t l : labels) ++v.offsets[l + 1];
+  for (uint32_t c = 0; c < clusters; ++c) v.offsets[c + 1] += v.offsets[c];
+  v.members.resize(nf);
+  std::vector<uint32_t> cursor(v.offsets.begin(), v.offsets.end() - 1);
+  for (uint32_t f = 0; f < nf; ++f) v.members[cursor[labels[f]]++] = f;
+  v.weight.assign(clusters, 0.0);
+  v.centroid.assign(3 * size_t(clusters), 0.0);
+  v.component.assign(clusters, kNone);
+  for (uint32_t f = 0; f < nf; ++f) {
+    uint32_t c = labels[f];
+    v.weight[c] += data.weight[f];
+    for (int k = 0; k < 3; ++k) v.centroid[3 * size_t(c) + k] += data.weight[f] * data.centroid[3 * size_t(f) + k];
+    v.component[c] = topology.face_component[f];
+  }
+  for (uint32_t c = 0; c < clusters; ++c) {
+    if (v.weight[c] > 0) {
+      for (int k = 0; k < 3; ++k) v.centroid[3 * size_t(c) + k] /= v.weight[c];
+    } else if (v.size(c) > 0) {  // weightless faces: plain mean of their centroids
+      for (int k = 0; k < 3; ++k) v.centroid[3 * size_t(c) + k] = 0;
+      for (uint32_t i = v.offsets[c]; i < v.offsets[c + 1]; ++i)
+        for (int k = 0; k < 3; ++k) v.centroid[3 * size_t(c) + k] += data.centroid[3 * size_t(v.members[i]) + k];
+      for (int k = 0; k < 3; ++k) v.centroid[3 * size_t(c) + k] /= v.size(c);
+    }
+  }
+  std::vector<uint64_t> pairs;
+  for (uint32_t f = 0; f < nf; ++f)
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
+      if (o != kNone && labels[o] != labels[f]) pairs.push_back(uint64_t(labels[f]) << 32 | labels[o]);
+    }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  v.neighbour_offsets.assign(size_t(clusters) + 1, 0);
+  v.neighbours.resize(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    ++v.neighbour_offsets[(pairs[i] >> 32) + 1];
+    v.neighbours[i] = uint32_t(pairs[i]);
+  }
+  for (uint32_t c = 0; c < clusters; ++c) v.neighbour_offsets[c + 1] += v.neighbour_offsets[c];
+  return v;
+}
+
+// Eigenvectors of a symmetric 3x3 matrix by cyclic Jacobi rotations, ordered by decreasing
+// eigenvalue (rows of `vectors`). A fixed number of sweeps: deterministic, and 3x3 converges fast.
+void symmetric_eigenvectors(double a[3][3], double vectors[3][3]) {
+  double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int sweep = 0; sweep < 16; ++sweep) {
+    double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    if (!(off > 1e-30 * (a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2]))) break;
+    for (int p = 0; p < 2; ++p)
+      for (int q = p + 1; q < 3; ++q) {
+        if (a[p][q] == 0) continue;
+        double theta = (a[q][q] - a[p][p]) / (2 * a[p][q]);
+        double t = (theta >= 0 ? 1 : -1) / (std::fabs(theta) + std::sqrt(theta * theta + 1));
+        double c = 1 / std::sqrt(t * t + 1), s = t * c;
+        for (int k = 0; k < 3; ++k) {  // A <- A J (columns p, q)
+          double akp = a[k][p], akq = a[k][q];
+          a[k][p] = c * akp - s * akq;
+          a[k][q] = s * akp + c * akq;
+        }
+        for (int k = 0; k < 3; ++k) {  // A <- J^T A (rows p, q)
+          double apk = a[p][k], aqk = a[q][k];
+          a[p][k] = c * apk - s * aqk;
+          a[q][k] = s * apk + c * aqk;
+        }
+        for (int k = 0; k < 3; ++k) {  // V <- V J
+          double vkp = v[k][p], vkq = v[k][q];
+          v[k][p] = c * vkp - s * vkq;
+          v[k][q] = s * vkp + c * vkq;
+        }
+      }
+  }
+  int order[3] = {0, 1, 2};
+  std::sort(order, order + 3, [&](int x, int y) { return a[x][x] != a[y][y] ? a[x][x] > a[y][y] : x < y; });
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k) vectors[i][k] = v[k][order[i]];
+}
+
+// Scores sets of faces as the clusters they would become, next to the other clusters of `labels`.
+// What makes a cluster fit for the dual: edge-connected, a disk (V - E + F = 1), its edges along the
+// mesh boundary in one arc at most, one border with each neighbouring cluster (the ends of its
+// border edges with a neighbour, counted per vertex, are the chains' ends: two per chain), and
+// three neighbours or more (two on the boundary). Scratch arrays are sized once per mesh.
+class RegionCheck {
+ public:
+  RegionCheck(const Mesh& mesh, const Topology& topology, const FaceData& data)
+      : mesh_(mesh), topology_(topology), data_(data), piece_(mesh.face_count(), kOutside),
+        vertex_stamp_(mesh.vertex_count(), 0) {}
+
+  // faces[i] would become piece side[i] (0 .. pieces-1). Lower is better: 1000 per piece that is not
+  // connected, 100 per piece that is not a disk, for each of its neighbours (the boundary, the other
+  // pieces, other clusters) it would share two borders with, 10 per piece with too few neighbours;
+  // plus the weight imbalance (max - min) / total in [0, 1]. Below 10: every piece is fit.
+  double score(const std::vector<uint32_t>& faces, const std::vector<uint8_t>& side, uint8_t pieces,
+               const std::vector<uint32_t>& labels) {
+    std::array<double, 3> weight{0, 0, 0};
+    std::array<uint32_t, 3> count{0, 0, 0};
+    for (size_t i = 0; i < faces.size(); ++i) {
+      piece_[faces[i]] = side[i];
+      ++count[side[i]];
+      weight[side[i]] += data_.weight[faces[i]];
+    }
+    double s = 0;
+    for (uint8_t p = 0; p < pieces; ++p)
+      if (count[p] == 0) s = std::numeric_limits<double>::infinity();
+    if (s == 0) {
+      for (uint8_t p = 0; p < pieces; ++p) s += piece_score(faces, side, p, count[p], labels);
+      double total = 0, lo = std::numeric_limits<double>::infinity(), hi = 0;
+      for (uint8_t p = 0; p < pieces; ++p) total += weight[p], lo = std::min(lo, weight[p]), hi = std::max(hi, weight[p]);
+      if (pieces > 1 && total > 0) s += (hi - lo) / total;
+    }
+    for (uint32_t f : faces) piece_[f] = kOutside;
+    return s;
+  }
+
+ private:
+  static constexpr uint8_t kOutside = 0xff;
+  static constexpr uint32_t kBoundary = kNone;         // neighbour id of the mesh boundary
+  static constexpr uint32_t kPiece = 0xfffffff0u;      // neighbour id of piece q: kPiece + q
+
+  double piece_score(const std::vector<uint32_t>& faces, const std::vector<uint8_t>& side, uint8_t p,
+                     uint32_t count, const std::vector<uint32_t>& labels) {
+    double s = 0;
+    uint32_t first = kNone;
+    for (size_t i = 0; i < faces.size() && first == kNone; ++i)
+      if (side[i] == p) first = faces[i];
+    // connected: breadth-first over the piece, marking with p + 3 (pieces are 0..2), then back to p
+    const uint8_t mark = uint8_t(p + 3);
+    queue_.assign(1, first);
+    piece_[first] = mark;
+    for (size_t head = 0; head < queue_.size(); ++head)
+      for (int e = 0; e < 3; ++e) {
+        uint32_t o = topology_.face_adjacent[3 * size_t(queue_[head]) + e];
+        if (o != kNone && piece_[o] == p) piece_[o] = mark, queue_.push_back(o);
+      }
+    for (uint32_t f : queue_) piece_[f] = p;
+    if (queue_.size() != count) s += 1000;
+
+    if (++stamp_ == 0) {  // wrapped: clear once
+      std::fill(vertex_stamp_.begin(), vertex_stamp_.end(), 0);
+      stamp_ = 1;
+    }
+    int64_t vertices = 0, border = 0;
+    ends_.clear();
+    for (size_t i = 0; i < faces.size(); ++i) {
+      if (side[i] != p) continue;
+      const uint32_t f = faces[i];
+      const uint32_t* t = &mesh_.indices[3 * size_t(f)];
+      for (int k = 0; k < 3; ++k)
+        if (vertex_stamp_[t[k]] != stamp_) vertex_stamp_[t[k]] = stamp_, ++vertices;
+      for (int e = 0; e < 3; ++e) {
+        uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
+        if (o != kNone && piece_[o] == p) continue;
+        ++border;
+        uint32_t id = o == kNone ? kBoundary : piece_[o] != kOutside ? kPiece + piece_[o] : labels[o];
+        ends_.push_back({id, t[e]});
+        ends_.push_back({id, t[(e + 1) % 3]});
+      }
+    }
+    if (2 * vertices - int64_t(count) - border != 2) s += 100;  // 2 chi = 2V - 2E + 2F, 2E = 3F + B
+    // Per neighbour: vertices with exactly one border edge to it are chain ends; more than two ends
+    // mean two borders (two arcs for the boundary).
+    std::sort(ends_.begin(), ends_.end());
+    uint32_t neighbours = 0;
+    bool open = false;
+    for (size_t i = 0; i < ends_.size();) {
+      size_t j = i;
+      uint32_t chain_ends = 0;
+      while (j < ends_.size() && ends_[j].first == ends_[i].first) {
+        size_t k = j;
+        while (k < ends_.size() && ends_[k] == ends_[j]) ++k;
+        chain_ends += k - j == 1;
+        j = k;
+      }
+      if (ends_[i].first == kBoundary)
+        open = true;
+      else
+        ++neighbours;
+      if (chain_ends > 2) s += 100;
+      i = j;
+    }
+    if (neighbours < (open ? 2u : 3u)) s += 10;
+    return s;
+  }
+
+  const Mesh& mesh_;
+  const Topology& topology_;
+  const FaceData& data_;
+  std::vector<uint8_t> piece_;  // per face: its piece while a region is scored, else kOutside
+  std::vector<uint32_t> vertex_stamp_;
+  uint32_t stamp_ = 0;
+  std::vector<uint32_t> queue_;
+  std::vector<std::pair<uint32_t, uint32_t>> ends_;  // (neighbour id, vertex) per end of a border edge
+};
+
+// Ways to cut one cluster into 2 or 3 pieces, scored by RegionCheck.
+//  - 2 pieces: the planes through the mass centroid normal to each principal axis (largest spread
+//    first); halves grown breadth-first from two far-apart faces (of the whole cluster, of its faces
+//    next to the partner of a double border, of its faces on the boundary).
+//  - 3 pieces, tried when no 2-piece cut is fit: a ring around a handle cut in two gives two pieces
+//    sharing two borders, so it needs three sectors: sectors of 120 degrees around each principal
+//    axis through the centroid, and thirds grown from three far-apart faces.
+class ClusterCutter {
+ public:
+  struct Plan {
+    std::vector<uint8_t> side;  // piece of each face of the cluster (view order)
+    uint8_t pieces = 0;
+    double score = std::numeric_limits<double>::infinity();
+  };
+
+  ClusterCutter(const Mesh& mesh, const Topology& topology, const FaceData& data, RegionCheck& check)
+      : mesh_indices_(mesh.indices), topology_(topology), data_(data), check_(check),
+        grow_mark_(data.weight.size(), kNone) {}
+
+  // The best cut of `target` (>= 3 faces for 3 pieces, >= 2 for 2). `partner`: the other cluster
+  // of a double border, or kNone; `boundary`: seed halves on the boundary too.
+  Plan plan(const ClusterView& view, const std::vector<uint32_t>& labels, uint32_t target, uint32_t partner,
+            bool boundary) {
+    members_.assign(view.members.begin() + view.offsets[target], view.members.begin() + view.offsets[target + 1]);
+    const uint32_t count = uint32_t(members_.size());
+    const double* centre = &view.centroid[3 * size_t(target)];
+    double axes[3][3];
+    principal_axes(centre, axes);
+
+    Plan two, three;
+    auto consider = [&](Plan& best, std::vector<uint8_t> side, uint8_t pieces) {
+      double s = check_.score(members_, side, pieces, labels);
+      if (s < best.score) best = {std::move(side), pieces, s};
+    };
+    for (const auto& axis : axes) {
+      std::vector<uint8_t> side(count);
+      for (uint32_t i = 0; i < count; ++i) side[i] = offset(i, centre, axis) > 0;
+      consider(two, std::move(side), 2);
+    }
+    std::vector<uint32_t> pool(count);
+    for (uint32_t i = 0; i < count; ++i) pool[i] = i;
+    std::vector<uint32_t> seeds = far_apart(pool, centre, 2);
+    if (seeds.size() == 2) consider(two, grow(seeds), 2);
+    auto seeded_on = [&](auto pred) {
+      std::vector<uint32_t> some;
+      for (uint32_t i = 0; i < count; ++i)
+        for (int e = 0; e < 3; ++e)
+          if (pred(topology_.face_adjacent[3 * size_t(members_[i]) + e])) {
+            some.push_back(i);
+            break;
+          }
+      std::vector<uint32_t> s = far_apart(some, centre, 2);
+      if (s.size() == 2) consider(two, grow(s), 2);
+    };
+    if (partner != kNone) seeded_on([&](uint32_t o) { return o != kNone && labels[o] == partner; });
+    if (boundary) seeded_on([](uint32_t o) { return o == kNone; });
+    if (two.score < 10 || count < 3) return two;
+
+    for (int k = 0; k < 3; ++k) {
+      const double* u = axes[(k + 1) % 3];
+      const double* w = axes[(k + 2) % 3];
+      std::vector<uint8_t> side(count);
+      for (uint32_t i = 0; i < count; ++i) {
+        double angle = std::atan2(offset(i, centre, w), offset(i, centre, u));  // [-pi, pi]
+        side[i] = uint8_t(std::min(2.0, std::floor((angle + std::numbers::pi) * 3 / (2 * std::numbers::pi))));
+      }
+      consider(three, std::move(side), 3);
+    }
+    seeds = far_apart(pool, centre, 3);
+    if (seeds.size() == 3) consider(three, grow(seeds), 3);
+    for (const std::vector<uint32_t>& loop : border_loops(labels, target))
+      for (uint32_t shift = 0; shift < 2; ++shift) consider(three, loop_sectors(loop, 3, shift), 3);
+    return three.score < two.score ? three : two;
+  }
+
+ private:
+  double offset(uint32_t i, const double* centre, const double* axis) const {
+    const double* p = &data_.centroid[3 * size_t(members_[i])];
+    return (p[0] - centre[0]) * axis[0] + (p[1] - centre[1]) * axis[1] + (p[2] - centre[2]) * axis[2];
+  }
+
+  void principal_axes(const double* centre, double axes[3][3]) const {
+    double cov[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    for (uint32_t f : members_) {
+      double w = data_.weight[f] > 0 ? data_.weight[f] : 0;
+      const double* p = &data_.centroid[3 * size_t(f)];
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) cov[r][c] += w * (p[r] - centre[r]) * (p[c] - centre[c]);
+    }
+    symmetric_eigenvectors(cov, axes);
+  }
+
+  // Up to k faces of `pool` (indices into members_) far apart: the farthest from the centre, then
+  // each next one maximizing its distance to the closest already chosen (ties: lower index).
+  std::vector<uint32_t> far_apart(const std::vector<uint32_t>& pool, const double* centre, uint32_t k) const {
+    std::vector<uint32_t> chosen;
+    if (pool.size() < k) return chosen;
+    std::vector<double> nearest(pool.size(), 0.0);
+    for (size_t j = 0; j < pool.size(); ++j) nearest[j] = squared_distance3(&data_.centroid[3 * size_t(members_[pool[j]])], centre);
+    while (chosen.size() < k) {
+      size_t best = 0;
+      for (size_t j = 1; j < pool.size(); ++j)
+        if (nearest[j] > nearest[best]) best = j;
+      chosen.push_back(pool[best]);
+      const double* c = &data_.centroid[3 * size_t(members_[pool[best]])];
+      for (size_t j = 0; j < pool.size(); ++j) {
+        double d = squared_distance3(&data_.centroid[3 * size_t(members_[pool[j]])], c);
+        nearest[j] = chosen.size() == 1 ? d : std::min(nearest[j], d);
+      }
+    }
+    return chosen;
+  }
+
+  // The loops of the cluster's border, each as its faces in loop order (one entry per border edge,
+  // a face repeated when several of its edges are on the loop). A border half-edge ending at vertex
+  // b is followed by the next border half-edge leaving b, found by turning around b through the
+  // cluster's faces. Empty when the walk does not close (inconsistent orientation, non-manifold).
+  std::vector<std::vector<uint32_t>> border_loops(const std::vector<uint32_t>& labels, uint32_t target) const {
+    std::vector<std::vector<uint32_t>> loops;
+    std::vector<uint32_t> edges;  // border half-edges 3f + e, increasing
+    for (uint32_t f : members_)
+      for (int e = 0; e < 3; ++e) {
+        uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
+        if (o == kNone || labels[o] != target) edges.push_back(3 * f + uint32_t(e));
+      }
+    const std::vector<uint32_t>& idx = mesh_indices_;
+    std::vector<uint8_t> done(edges.size(), 0);
+    auto position = [&](uint32_t h) {
+      auto it = std::lower_bound(edges.begin(), edges.end(), h);
+      return it != edges.end() && *it == h ? size_t(it - edges.begin()) : edges.size();
+    };
+    for (size_t start = 0; start < edges.size(); ++start) {
+      if (done[start]) continue;
+      std::vector<uint32_t> loop;
+      size_t at = start;
+      bool closed = false;
+      for (size_t steps = 0; steps <= edges.size(); ++steps) {
+        done[at] = 1;
+        uint32_t h = edges[at], f = h / 3;
+        loop.push_back(f);
+        // turn around the end vertex b of h, from the edge of f that leaves b
+        uint32_t b = idx[3 * size_t(f) + (h % 3 + 1) % 3];
+        uint32_t g = f, out = 3 * f + (h % 3 + 1) % 3;
+        size_t next = edges.size();
+        for (uint32_t turn = 0; turn < 64; ++turn) {
+          uint32_t o = topology_.face_adjacent[out];
+          if (o == kNone || labels[o] != target) {
+            next = position(out);
+            break;
+          }
+          // in the neighbour o, the edge leaving b
+          int cb = idx[3 * size_t(o)] == b ? 0 : idx[3 * size_t(o) + 1] == b ? 1 : idx[3 * size_t(o) + 2] == b ? 2 : 3;
+          if (cb == 3 || o == g) break;
+          g = o;
+          out = 3 * o + uint32_t(cb);
+        }
+        if (next == edges.size()) break;
+        if (next == start) {
+          closed = true;
+          break;
+        }
+        if (done[next]) break;
+        at = next;
+      }
+      if (!closed) return {};
+      loops.push_back(std::move(loop));
+    }
+    return loops;
+  }
+
+  // k sectors of the cluster along one border loop: the loop's faces split into k runs of equal
+  // length (starting `shift` sixths of a run in), every other face taking the sector of the loop
+  // face it is reached from first, breadth-first. A ring around a handle comes out as k pieces
+  // across it, each from one boundary of the ring to the other.
+  std::vector<uint8_t> loop_sectors(const std::vector<uint32_t>& loop, uint32_t k, uint32_t shift) {
+    const uint32_t count = uint32_t(members_.size());
+    constexpr uint32_t kUnclaimed = kNone - 1;
+    for (uint32_t i = 0; i < count; ++i) grow_mark_[members_[i]] = kUnclaimed;
+    queue_.clear();
+    const size_t length = loop.size();
+    const size_t offset = length * shift / (6 * k);
+    for (size_t j = 0; j < length; ++j) {
+      uint32_t f = loop[(j + offset) % length];
+      if (grow_mark_[f] != kUnclaimed) continue;
+      grow_mark_[f] = uint32_t(j * k / length);
+      queue_.push_back(f);
+    }
+    for (size_t head = 0; head < queue_.size(); ++head)
+      for (int e = 0; e < 3; ++e) {
+        uint32_t o = topology_.face_adjacent[3 * size_t(queue_[head]) + e];
+        if (o != kNone && grow_mark_[o] == kUnclaimed) grow_mark_[o] = grow_mark_[queue_[head]], queue_.push_back(o);
+      }
+    std::vector<uint8_t> side(count);
+    for (uint32_t i = 0; i < count; ++i) {
+      uint32_t m = grow_mark_[members_[i]];
+      side[i] = m == kUnclaimed ? 0 : uint8_t(m);
+      grow_mark_[members_[i]] = kNone;
+    }
+    return side;
+  }
+
+  // Pieces grown breadth-first inside the cluster from the seeds (piece = seed's position); faces
+  // not reached (a cluster in pieces) go to piece 0.
+  std::vector<uint8_t> grow(const std::vector<uint32_t>& seeds) {
+    const uint32_t count = uint32_t(members_.size());
+    constexpr uint32_t kUnclaimed = kNone - 1;
+    for (uint32_t i = 0; i < count; ++i) grow_mark_[members_[i]] = kUnclaimed;
+    queue_.clear();
+    for (uint32_t s = 0; s < seeds.size(); ++s) {
+      grow_mark_[members_[seeds[s]]] = s;
+      queue_.push_back(members_[seeds[s]]);
+    }
+    for (size_t head = 0; head < queue_.size(); ++head)
+      for (int e = 0; e < 3; ++e) {
+        uint32_t o = topology_.face_adjacent[3 * size_t(queue_[head]) + e];
+        if (o != kNone && grow_mark_[o] == kUnclaimed) grow_mark_[o] = grow_mark_[queue_[head]], queue_.push_back(o);
+      }
+    std::vector<uint8_t> side(count);
+    for (uint32_t i = 0; i < count; ++i) {
+      uint32_t m = grow_mark_[members_[i]];
+      side[i] = m == kUnclaimed ? 0 : uint8_t(m);
+      grow_mark_[members_[i]] = kNone;
+    }
+    return side;
+  }
+
+  const std::vector<uint32_t>& mesh_indices_;
+  const Topology& topology_;
+  const FaceData& data_;
+  RegionCheck& check_;
+  std::vector<uint32_t> grow_mark_;  // per face: seed that claimed it while growing, else kNone
+  std::vector<uint32_t> members_, queue_;
+};
+
+// The clusters of a defect that could be cut to remove it, best first (empty: not fixable by a cut).
+std::vector<uint32_t> cut_choices(const DualDefect& d, const ClusterView& view) {
+  auto heavier_first = [&](uint32_t a, uint32_t b) {
+    return view.weight[a] != view.weight[b] ? view.weight[a] > view.weight[b] : a < b;
+  };
+  std::vector<uint32_t> c;
+  switch (d.kind) {
+    case DualDefect::cluster_not_disk:
+    case DualDefect::boundary_arcs:
+      c = {d.cluster};
+      break;
+    case DualDefect::double_border:
+    case DualDefect::nonmanifold_output:
+    case DualDefect::inconsistent_orientation:
+    case DualDefect::missing_boundary_edge:
+      c = {d.cluster, d.other};
+      std::sort(c.begin(), c.end(), heavier_first);
+      break;
+    case DualDefect::duplicate_triangle:
+      // Usually one of the three has only two neighbours (both corners give its triangle): cut it.
+      c = {d.cluster, d.other, d.third};
+      std::sort(c.begin(), c.end(), [&](uint32_t a, uint32_t b) {
+        return view.valence(a) != view.valence(b) ? view.valence(a) < view.valence(b) : heavier_first(a, b);
+      });
+      break;
+    case DualDefect::degenerate_triangle:  // geometry, not topology
+    case DualDefect::empty_cluster:        // cluster() never leaves one
+      break;
+  }
+  return c;
+}
+
+bool uses(const DualDefect& d, uint32_t c) { return d.cluster == c || d.other == c || d.third == c; }
+
+// Merges that keep n while cuts add clusters: adjacent pairs by the energy their merge adds,
+// W_a W_b / (W_a + W_b) |c_a - c_b|^2, cheapest first, taken when the merged cluster is fit
+// (RegionCheck) and, preferably, away from every defect and from the round's other changes.
+class MergeFinder {
+ public:
+  MergeFinder(const ClusterView& view, RegionCheck& check) : view_(view), check_(check) {
+    const uint32_t n = view.clusters;
+    for (uint32_t a = 0; a < n; ++a)
+      for (uint32_t i = view.neighbour_offsets[a]; i < view.neighbour_offsets[a + 1]; ++i) {
+        uint32_t b = view.neighbours[i];
+        if (b <= a) continue;
+        double w = view.weight[a] + view.weight[b];
+        double cost = w > 0 ? view.weight[a] * view.weight[b] / w *
+                                  squared_distance3(&view.centroid[3 * size_t(a)], &view.centroid[3 * size_t(b)])
+                            : 0.0;
+        pairs_.push_back({cost, a, b});
+      }
+    std::sort(pairs_.begin(), pairs_.end(), [](const Pair& x, const Pair& y) {
+      if (x.cost != y.cost) return x.cost < y.cost;
+      return x.a != y.a ? x.a < y.a : x.b < y.b;
+    });
+    taken_.assign(pairs_.size(), 0);
+  }
+
+  struct Pair {
+    double cost;
+    uint32_t a, b;
+  };
+
+  // The cheapest fit pair of `component` whose clusters are not `blocked` (cut, partner or merged
+  // this round), trying in turn: (0) clusters in no defect (`involved`), not next to a blocked
+  // cluster nor to another merge (`nearby`), whose common neighbours keep three neighbours;
+  // (1) any fit pair; (2) any pair. Returns kNone-filled pair when the component has none.
+  Pair find(uint32_t component, const std::vector<uint8_t>& blocked, const std::vector<uint8_t>& involved,
+            const std::vector<uint8_t>& nearby, const std::vector<uint32_t>& labels) {
+    for (int tier = 0; tier < 2; ++tier) {
+      uint32_t scored = 0;
+      for (size_t i = 0; i < pairs_.size(); ++i) {
+        const Pair& p = pairs_[i];
+        if (taken_[i] || view_.component[p.a] != component || blocked[p.a] || blocked[p.b]) continue;
+        if (tier == 0 && (involved[p.a] || involved[p.b] || nearby[p.a] || nearby[p.b])) continue;
+        if (!keeps_valence(p.a, p.b)) continue;
+        if (++scored > kMaxScored) break;  // bounded work per search
+        if (!fit(p, labels)) continue;
+        taken_[i] = 1;
+        return p;
+      }
+    }
+    return {0, kNone, kNone};
+  }
+
+ private:
+  static constexpr uint32_t kMaxScored = 64;
+
+  bool keeps_valence(uint32_t a, uint32_t b) {
+    auto ab = view_.neighbours.begin() + view_.neighbour_offsets[a], ae = view_.neighbours.begin() + view_.neighbour_offsets[a + 1];
+    auto bb = view_.neighbours.begin() + view_.neighbour_offsets[b], be = view_.neighbours.begin() + view_.neighbour_offsets[b + 1];
+    common_.clear();
+    std::set_intersection(ab, ae, bb, be, std::back_inserter(common_));
+    for (uint32_t c : common_)
+      if (view_.valence(c) < 4) return false;
+    return true;
+  }
+
+  bool fit(const Pair& p, const std::vector<uint32_t>& labels) {
+    faces_.clear();
+    for (uint32_t c : {p.a, p.b})
+      faces_.insert(faces_.end(), view_.members.begin() + view_.offsets[c], view_.members.begin() + view_.offsets[c + 1]);
+    side_.assign(faces_.size(), 0);
+    return check_.score(faces_, side_, 1, labels) < 10;
+  }
+
+  const ClusterView& view_;
+  RegionCheck& check_;
+  std::vector<Pair> pairs_;
+  std::vector<uint8_t> taken_;
+  std::vector<uint32_t> common_, faces_;
+  std::vector<uint8_t> side_;
+};
+
+// One round of fixes on `labels` (the clustering of `view`): separating faces moved out of double
+// borders, then the clusters the other defects name cut into 2 or 3 fit pieces with as many fit
+// merges in the same components. Each cluster takes part in one change per round (the view's face
+// lists stay exact for the others). Returns the fixes.
+std::vector<CoarsenFix> fix_round(const Topology& topology, const ClusterView& view,
+                                  const std::vector<DualDefect>& defects, uint32_t round, ClusterCutter& cutter,
+                                  RegionCheck& check, std::vector<uint32_t>& labels) {
+  const uint32_t n = view.clusters;
+  std::vector<uint8_t> involved(n, 0), blocked(n, 0), nearby(n, 0);
+  for (const DualDefect& d : defects)
+    for (uint32_t c : {d.cluster, d.other, d.third})
+      if (c < n) involved[c] = 1;
+  auto mark_neighbours = [&](uint32_t c) {
+    for (uint32_t i = view.neighbour_offsets[c]; i < view.neighbour_offsets[c + 1]; ++i) nearby[view.neighbours[i]] = 1;
+  };
+
+  std::vector<CoarsenFix> fixes;
+  // Double borders first by moving a separating face: a face of a third cluster with edges on both
+  // clusters, moved into one of them when both clusters it changes stay fit. Cheap (n unchanged)
+  // and what a border roughened by the iteration needs (one face of a neighbour poking between the
+  // two, splitting their border in two).
+  std::vector<uint32_t> faces;
+  std::vector<uint8_t> side;
+  auto fit_without = [&](uint32_t cluster, uint32_t face) {
+    faces.clear();
+    for (uint32_t i = view.offsets[cluster]; i < view.offsets[cluster + 1]; ++i)
+      if (view.members[i] != face) faces.push_back(view.members[i]);
+    if (faces.empty()) return false;
+    side.assign(faces.size(), 0);
+    return check.score(faces, side, 1, labels) < 10;
+  };
+  auto fit_with = [&](uint32_t cluster, uint32_t face) {
+    faces.assign(view.members.begin() + view.offsets[cluster], view.members.begin() + view.offsets[cluster + 1]);
+    faces.push_back(face);
+    side.assign(faces.size(), 0);
+    return check.score(faces, side, 1, labels) < 10;
+  };
+  for (const DualDefect& d : defects) {
+    if (d.kind != DualDefect::double_border || blocked[d.cluster] || blocked[d.other]) continue;
+    bool done = false;
+    for (uint32_t i = view.offsets[d.cluster]; i < view.offsets[d.cluster + 1] && !done; ++i)
+      for (int e = 0; e < 3 && !done; ++e) {
+        uint32_t f = topology.face_adjacent[3 * size_t(view.members[i]) + e];
+        if (f == kNone || labels[f] == d.cluster || labels[f] == d.other || blocked[labels[f]]) continue;
+        bool touches_other = false;
+        for (int k = 0; k < 3; ++k) {
+          uint32_t g = topology.face_adjacent[3 * size_t(f) + k];
+          touches_other = touches_other || (g != kNone && labels[g] == d.other);
+        }
+        if (!touches_other) continue;
+        uint32_t from = labels[f];
+        if (!fit_without(from, f)) continue;
+        for (uint32_t to : {d.cluster, d.other}) {
+          if (!fit_with(to, f)) continue;
+          labels[f] = to;
+          for (uint32_t c : {from, d.cluster, d.other}) blocked[c] = 1, mark_neighbours(c);
+          CoarsenFix fix;
+          fix.action = CoarsenFix::move_faces;
+          fix.defect = d;
+          fix.cluster = from;
+          fix.other = to;
+          fix.faces = 1;
+          fix.round = round;
+          fixes.push_back(fix);
+          done = true;
+          break;
+        }
+      }
+  }
+
+  // Which cluster to cut for each defect: one cut per cluster, none for a defect whose clusters
+  // already have one this round (that cut may remove it).
+  struct Cut {
+    DualDefect defect;
+    uint32_t target, partner;
+  };
+  std::vector<Cut> cuts;
+  for (const DualDefect& d : defects) {
+    bool handled = false;
+    for (const Cut& c : cuts) handled = handled || uses(d, c.target);
+    if (handled) continue;
+    for (uint32_t c : cut_choices(d, view)) {
+      if (c >= n || view.size(c) < 2 || blocked[c]) continue;
+      uint32_t partner = d.kind == DualDefect::double_border ? (c == d.cluster ? d.other : d.cluster) : kNone;
+      cuts.push_back({d, c, partner});
+      blocked[c] = 1;
+      mark_neighbours(c);
+      if (partner != kNone) blocked[partner] = 1, mark_neighbours(partner);
+      break;
+    }
+  }
+
+  if (cuts.empty()) return fixes;
+  MergeFinder merges(view, check);
+  for (const Cut& cut : cuts) {
+    ClusterCutter::Plan plan =
+        cutter.plan(view, labels, cut.target, cut.partner, cut.defect.kind == DualDefect::boundary_arcs);
+    if (!(plan.score < 10)) continue;  // no cut gives fit pieces: leave it to a later round
+    std::vector<MergeFinder::Pair> chosen;
+    for (uint8_t k = 1; k < plan.pieces; ++k) {
+      MergeFinder::Pair p = merges.find(view.component[cut.target], blocked, involved, nearby, labels);
+      if (p.a == kNone) break;
+      chosen.push_back(p);
+      blocked[p.a] = blocked[p.b] = 1;  // each cluster in one change per round
+      mark_neighbours(p.a);
+      mark_neighbours(p.b);
+    }
+    if (chosen.size() + 1 < plan.pieces) continue;  // no room in this component this round
+    const uint32_t* members = &view.members[view.offsets[cut.target]];
+    for (size_t k = 0; k < chosen.size(); ++k) {
+      for (uint32_t i = view.offsets[chosen[k].b]; i < view.offsets[chosen[k].b + 1]; ++i)
+        labels[view.members[i]] = chosen[k].a;
+      uint32_t piece = uint32_t(k + 1);
+      for (uint32_t i = 0; i < view.size(cut.target); ++i)
+        if (plan.side[i] == piece) labels[members[i]] = chosen[k].b;
+      CoarsenFix fix;
+      fix.action = CoarsenFix::cut;
+      fix.defect = cut.defect;
+      fix.cluster = cut.target;
+      fix.merged_into = chosen[k].a;
+      fix.freed = chosen[k].b;
+      fix.round = round;
+      fixes.push_back(fix);
+    }
+  }
+  return fixes;
+}
+
+// Defects per mesh component (through the first cluster each names).
+std::vector<uint32_t> defects_per_component(const Topology& topology, const std::vector<uint32_t>& labels,
+                                            uint32_t clusters, const std::vector<DualDefect>& defects) {
+  std::vector<uint32_t> component(clusters, kNone), count(topology.component_count, 0);
+  for (size_t f = 0; f < labels.size(); ++f) component[labels[f]] = topology.face_component[f];
+  for (const DualDefect& d : defects)
+    if (d.cluster < clusters && component[d.cluster] != kNone) ++count[component[d.cluster]];
+  return count;
+}
+
+// Clusters per mesh component.
+std::vector<uint32_t> clusters_per_component(const Topology& topology, const std::vector<uint32_t>& labels,
+                                             uint32_t clusters) {
+  std::vector<uint32_t> component(clusters, kNone), count(topology.component_count, 0);
+  for (size_t f = 0; f < labels.size(); ++f) component[labels[f]] = topology.face_component[f];
+  for (uint32_t c = 0; c < clusters; ++c)
+    if (component[c] != kNone) ++count[component[c]];
+  return count;
+}
+
+// Component `c` of `base` takes the clusters of `other` there (the same number of them): the ids
+// base uses in c, in increasing order, go to other's clusters of c in increasing order.
+void replace_component(const Topology& topology, std::vector<uint32_t>& base, const std::vector<uint32_t>& other,
+                       uint32_t c) {
+  std::vector<uint32_t> base_ids, other_ids;
+  for (size_t f = 0; f < base.size(); ++f)
+    if (topology.face_component[f] == c) base_ids.push_back(base[f]), other_ids.push_back(other[f]);
+  std::sort(base_ids.begin(), base_ids.end());
+  base_ids.erase(std::unique(base_ids.begin(), base_ids.end()), base_ids.end());
+  std::vector<uint32_t> sorted_other = other_ids;
+  std::sort(sorted_other.begin(), sorted_other.end());
+  sorted_other.erase(std::unique(sorted_other.begin(), sorted_other.end()), sorted_other.end());
+  assert(base_ids.size() == sorted_other.size());
+  for (size_t f = 0; f < base.size(); ++f)
+    if (topology.face_component[f] == c) {
+      size_t rank = size_t(std::lower_bound(sorted_other.begin(), sorted_other.end(), other[f]) - sorted_other.begin());
+      base[f] = base_ids[rank];
+    }
+}
+
+
+// Merges adjacent clusters of a valid clustering, cheapest energy first, until every component
+// holds its target count, taking only merges that keep the dual valid: the merged cluster is fit
+// (RegionCheck: a disk, one border with each neighbour, enough neighbours) and the clusters next to
+// both keep three neighbours or more. In the dual that is an edge contraction meeting the link
+// condition, so the dual stays a manifold of the same topology. Returns the merges made; the
+// targets are met when it equals clusters - sum(targets). Labels come out renumbered to
+// [0, sum(targets)) in the order of their old ids. by_weight: lightest pair first instead (even
+// sizes; a second chance when the energy order runs into a dead end, where every merge left would
+// leave some cluster with two neighbours).
+uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck& check, std::vector<uint32_t>& labels,
+                    uint32_t clusters, const std::vector<uint32_t>& targets, bool by_weight = false) {
+  ClusterView view = view_of(topology, data, labels, clusters);
+  std::vector<std::vector<uint32_t>> members(clusters), neighbours(clusters);
+  std::vector<double> weight = view.weight, sum(3 * size_t(clusters));
+  std::vector<uint32_t> stamp(clusters, 0), count(targets.size(), 0);
+  std::vector<uint8_t> alive(clusters, 1);
+  for (uint32_t c = 0; c < clusters; ++c) {
+    members[c].assign(view.members.begin() + view.offsets[c], view.members.begin() + view.offsets[c + 1]);
+    neighbours[c].assign(view.neighbours.begin() + view.neighbour_offsets[c],
+                         view.neighbours.begin() + view.neighbour_offsets[c + 1]);
+    for (int k = 0; k < 3; ++k) sum[3 * size_t(c) + k] = weight[c] * view.centroid[3 * size_t(c) + k];
+    if (!members[c].empty()) ++count[view.component[c]];
+  }
+  struct Entry {
+    double cost;
+    uint32_t a, b, stamp_a, stamp_b;
+    bool operator>(const Entry& o) const {
+      if (cost != o.cost) return cost > o.cost;
+      return a != o.a ? a > o.a : b > o.b;
+    }
+  };
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
+  auto push = [&](uint32_t a, uint32_t b) {
+    if (a > b) std::swap(a, b);
+    double w = weight[a] + weight[b], d = 0;
+    for (int k = 0; k < 3; ++k) {
+      double x = (w > 0 && weight[a] > 0 ? sum[3 * size_t(a) + k] / weight[a] : 0) -
+                 (w > 0 && weight[b] > 0 ? sum[3 * size_t(b) + k] / weight[b] : 0);
+      d += x * x;
+    }
+    heap.push({by_weight ? w : w > 0 ? weight[a] * weight[b] / w * d : 0.0, a, b, stamp[a], stamp[b]});
+  };
+  for (uint32_t a = 0; a < clusters; ++a)
+    for (uint32_t b : neighbours[a])
+      if (a < b) push(a, b);
+  std::vector<uint32_t> common, faces;
+  std::vector<uint8_t> side;
+  auto fit = [&](uint32_t a, uint32_t b) {
+    common.clear();
+    std::set_intersection(neighbours[a].begin(), neighbours[a].end(), neighbours[b].begin(), neighbours[b].end(),
+                          std::back_inserter(common));
+    for (uint32_t c : common)
+      if (neighbours[c].size() < 4) return false;
+    faces = members[a];
+    faces.insert(faces.end(), members[b].begin(), members[b].end());
+    side.assign(faces.size(), 0);
+    return check.score(faces, side, 1, labels) < 10;
+  };
+  uint32_t merges = 0;
+  while (!heap.empty()) {
+    Entry e = heap.top();
+    heap.pop();
+    uint32_t a = e.a, b = e.b;
+    if (!alive[a] || !alive[b] || e.stamp_a != stamp[a] || e.stamp_b != stamp[b]) continue;  // stale
+    uint32_t component = view.component[a];
+    if (count[component] <= targets[component] || !fit(a, b)) continue;
+    // b joins a
+    for (uint32_t f : members[b]) labels[f] = a;
+    members[a].insert(members[a].end(), members[b].begin(), members[b].end());
+    members[b].clear();
+    weight[a] += weight[b];
+    for (int k = 0; k < 3; ++k) sum[3 * size_t(a) + k] += sum[3 * size_t(b) + k];
+    std::vector<uint32_t> joined;
+    std::set_union(neighbours[a].begin(), neighbours[a].end(), neighbours[b].begin(), neighbours[b].end(),
+                   std::back_inserter(joined));
+    joined.erase(std::remove_if(joined.begin(), joined.end(), [&](uint32_t c) { return c == a || c == b; }), joined.end());
+    neighbours[a] = joined;
+    for (uint32_t r : neighbours[b]) {
+      if (r == a) continue;
+      std::vector<uint32_t>& nr = neighbours[r];
+      nr.erase(std::find(nr.begin(), nr.end(), b));
+      auto at = std::lower_bound(nr.begin(), nr.end(), a);
+      if (at == nr.end() || *at != a) nr.insert(at, a);
+    }
+    neighbours[b].clear();
+    alive[b] = 0;
+    --count[component];
+    ++merges;
+    // Everything around the merged cluster may have become (un)fit: new stamps, pairs pushed again.
+    ++stamp[a];
+    for (uint32_t r : neighbours[a]) ++stamp[r];
+    for (uint32_t r : neighbours[a]) {
+      push(a, r);
+      for (uint32_t s : neighbours[r])
+        if (s != a) push(r, s);
+    }
+  }
+  std::vector<uint32_t> renumber(clusters, kNone);
+  uint32_t next = 0;
+  for (uint32_t c = 0; c < clusters; ++c)
+    if (alive[c] && !members[c].empty()) renumber[c] = next++;
+  for (uint32_t& l : labels) l = renumber[l];
+  return merges;
+}
+
+// merge_down by energy, and per component where that stops above its target, by weight.
+std::vector<uint32_t> merge_down_twice(const Topology& topology, const FaceData& data, RegionCheck& check,
+                                       const std::vector<uint32_t>& labels, uint32_t clusters,
+                                       const std::vector<uint32_t>& targets) {
+  std::vector<uint32_t> by_energy = labels;
+  merge_down(topology, data, check, by_energy, clusters, targets);
+  std::vector<uint32_t> held = clusters_per_component(topology, by_energy, *std::max_element(by_energy.begin(), by_energy.end()) + 1);
+  bool stuck = false;
+  for (size_t c = 0; c < targets.size(); ++c) stuck = stuck || held[c] > targets[c];
+  if (!stuck) return by_energy;
+  std::vector<uint32_t> by_weight = labels;
+  merge_down(topology, data, check, by_weight, clusters, targets, true);
+  std::vector<uint32_t> held_w = clusters_per_component(topology, by_weight, *std::max_element(by_weight.begin(), by_weight.end()) + 1);
+  // Take each stuck component from the weight order where that one reached its target.
+  for (size_t c = 0; c < targets.size(); ++c)
+    if (held[c] > targets[c] && held_w[c] == targets[c]) {
+      // both labelings are renumbered; carry component c over by rank into fresh ids above the rest
+      uint32_t top = *std::max_element(by_energy.begin(), by_energy.end()) + 1;
+      for (size_t f = 0; f < labels.size(); ++f)
+        if (topology.face_component[f] == c) by_energy[f] = top + by_weight[f];
+    }
+  // Compact the ids again.
+  std::vector<uint32_t> ids = by_energy;
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  for (uint32_t& l : by_energy) l = uint32_t(std::lower_bound(ids.begin(), ids.end(), l) - ids.begin());
+  return by_energy;
+}
+
+// The fix loop on one clustering: rounds of fix_round until no defect is left; once valid, the
+// iteration smooths the fixed clusters: fully (it may bring defects back: the energy can prefer a
+// ring around a thin part; rounds without iterating then fix them), else in growing steps that
+// each keep the clustering valid. Returns the labels with the fewest defects (the latest valid).
+class FixLoop {
+  static constexpr uint32_t kSmoothingSteps = 12;
+
+ public:
+  FixLoop(const Mesh& mesh, const Topology& topology, const CoarsenMeshOptions& options, const FaceData& data,
+          RegionCheck& check, ClusterCutter& cutter)
+      : mesh_(mesh), topology_(topology), options_(options), data_(data), check_(check), cutter_(cutter),
+        weights_(options.cluster.density.empty() ? nullptr : &options.cluster.density) {}
+
+  struct Outcome {
+    std::vector<uint32_t> labels;
+    std::vector<DualDefect> defects;
+    std::optional<Clustering> clustering;  // set when `labels` are exactly this cluster() result's
+    std::vector<CoarsenFix> fixes;
+    uint32_t rounds = 0, iterations = 0;
+  };
+
+  std::vector<DualDefect> defects_of(const std::vector<uint32_t>& labels, uint32_t n) const {
+    return find_dual_defects(mesh_, topology_, labels, n, options_.coarsen, weights_);
+  }
+
+  // `source`: the converged cluster() result the labels are (not smoothed again), or null.
+  // `ro`: options for the iteration (clusters, component counts). `smooth`: smooth at all.
+  // `first_round`: number of the first fix round.
+  Outcome run(std::vector<uint32_t> labels, const Clustering* source, ClusterOptions ro, bool smooth,
+              uint32_t first_round) {
+    Outcome out;
+    ro.topology = TopologyMode::preserving;  // keeps the fixed clusters disks while they settle
+    out.labels = labels;
+    out.defects = defects_of(labels, ro.clusters);
+    if (source) out.clustering = *source;
+    first_round_ = first_round;
+    clusters_ = ro.clusters;
+    fix_rounds(out, labels);
+    if (!out.defects.empty() || !smooth || out.clustering) return out;
+
+    // Valid but not smoothed. Fully first:
+    const std::vector<uint32_t> valid = out.labels;
+    Clustering s = iterate(out, valid, ro, ro.max_iterations);
+    labels = s.labels;
+    std::vector<DualDefect> defects = defects_of(labels, ro.clusters);
+    if (defects.empty()) {
+      out.labels = std::move(labels), out.clustering = std::move(s);
+      return out;
+    }
+    Outcome again;
+    again.labels = labels;
+    again.defects = std::move(defects);
+    fix_rounds(again, labels);
+    if (again.defects.empty()) {
+      out.labels = std::move(again.labels);
+      out.fixes.insert(out.fixes.end(), again.fixes.begin(), again.fixes.end());
+      out.rounds += again.rounds;
+      return out;
+    }
+    // In steps from the valid labels: a step whose result is valid, or made valid again by fix
+    // rounds, is taken and the next one is twice as long; one that cannot be made valid is tried
+    // again half as long. At most kSmoothingSteps steps.
+    uint32_t remaining = ro.max_iterations, step = 4;
+    for (uint32_t steps = 0; remaining > 0 && step > 0 && steps < kSmoothingSteps; ++steps) {
+      Clustering c = iterate(out, out.labels, ro, std::min(step, remaining));
+      if (c.iterations == 0) break;
+      std::vector<DualDefect> d = defects_of(c.labels, ro.clusters);
+      if (!d.empty()) {
+        Outcome repaired;
+        repaired.labels = c.labels;
+        repaired.defects = std::move(d);
+        std::vector<uint32_t> work = c.labels;
+        fix_rounds(repaired, work);
+        if (!repaired.defects.empty()) {
+          step /= 2;
+          continue;
+        }
+        remaining -= std::min(remaining, c.iterations);
+        out.labels = std::move(repaired.labels);
+        out.clustering.reset();
+        out.fixes.insert(out.fixes.end(), repaired.fixes.begin(), repaired.fixes.end());
+        out.rounds += repaired.rounds;
+        step *= 2;
+        continue;
+      }
+      remaining -= std::min(remaining, c.iterations);
+      out.labels = c.labels;
+      bool converged = c.converged;
+      out.clustering = std::move(c);
+      if (converged) break;
+      step *= 2;
+    }
+    return out;
+  }
+
+ private:
+  Clustering iterate(Outcome& out, const std::vector<uint32_t>& from, ClusterOptions ro, uint32_t iterations) {
+    ro.initial_labels = from;
+    ro.max_iterations = iterations;
+    Clustering c = cluster(mesh_, topology_, ro);
+    out.iterations += c.iterations;
+    return c;
+  }
+
+  // Rounds of fix_round from `labels` (whose defects are out.defects) until clean or stuck; out
+  // keeps the best labels.
+  void fix_rounds(Outcome& out, std::vector<uint32_t>& labels) {
+    std::vector<DualDefect> defects = out.defects;
+    const uint32_t clusters = clusters_;
+    for (uint32_t r = 0; !defects.empty() && r < options_.max_fix_rounds; ++r) {
+      ClusterView view = view_of(topology_, data_, labels, clusters);
+      std::vector<CoarsenFix> fixes = fix_round(topology_, view, defects, first_round_ + out.rounds, cutter_, check_, labels);
+      if (fixes.empty()) break;  // nothing this loop can change any more
+      ++out.rounds;
+      for (CoarsenFix& f : fixes) f.clusters = clusters;
+      out.fixes.insert(out.fixes.end(), fixes.begin(), fixes.end());
+      defects = defects_of(labels, clusters);
+      if (defects.size() < out.defects.size() || defects.empty())
+        out.labels = labels, out.defects = defects, out.clustering.reset();
+    }
+  }
+
+  const Mesh& mesh_;
+  const Topology& topology_;
+  const CoarsenMeshOptions& options_;
+  const FaceData& data_;
+  RegionCheck& check_;
+  ClusterCutter& cutter_;
+  const std::vector<float>* weights_;
+  uint32_t first_round_ = 1, clusters_ = 0;
+};
+
+}  // namespace
+
+ComponentAllocation allocate_component_clusters(const Mesh& mesh, const Topology& topology, uint32_t n,
+                                                const std::vector<float>* density) {
+  if (topology.face_component.size() != mesh.face_count())
+    throw OptionError("coarsen: the topology was not built for this mesh");
+  check_density(mesh, density);
+  ComponentAllocation a;
+  describe_components(mesh, topology, a);
+  const uint32_t nc = topology.component_count;
+  if (n == 0) throw OptionError("coarsen: the number of vertices must be at least 1");
+  if (n > mesh.face_count())
+    throw OptionError("coarsen: cannot make " + std::to_string(n) + " clusters from " +
+                      std::to_string(mesh.face_count()) + " faces");
+  uint64_t needed = 0;
+  for (uint32_t c = 0; c < nc; ++c) {
+    if (a.faces[c] < a.minimum[c])
+      throw OptionError("coarsen: " + describe_component(a, c) + " has " + std::to_string(a.faces[c]) +
+                        " faces, fewer than the " + std::to_string(a.minimum[c]) +
+                        " clusters it needs to come out as a valid surface: subdivide the mesh first");
+    needed += a.minimum[c];
+  }
+  if (n < needed) {
+    std::string msg = "coarsen: n = " + std::to_string(n) + " is too small: the mesh's " + std::to_string(nc) +
+                      " component" + (nc > 1 ? "s need" : " needs") + " at least " + std::to_string(needed) +
+                      " clusters to come out as valid surfaces (";
+    for (uint32_t c = 0; c < nc && c < 6; ++c)
+      msg += (c ? "; " : "") + describe_component(a, c) + ": " + std::to_string(a.minimum[c]);
+    if (nc > 6) msg += "; ...";
+    throw OptionError(msg + ")");
+  }
+
+  // Share of each component: integral of sqrt(rho) dA.
+  std::vector<double> share(nc, 0.0);
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    double rho = density && !density->empty() ? double((*density)[f]) : 1.0;
+    share[topology.face_component[f]] += std::sqrt(rho) * face_area(mesh, f);
+  }
+  // Water filling: components whose proportional share is below their minimum (or above their
+  // face count) are fixed there and the rest is shared again among the others.
+  a.clusters.assign(nc, 0);
+  std::vector<uint8_t> fixed(nc, 0);
+  std::vector<double> target(nc, 0.0);
+  for (;;) {
+    uint64_t rest = n;
+    double total = 0;
+    uint32_t open = 0;
+    for (uint32_t c = 0; c < nc; ++c) {
+      if (fixed[c])
+        rest -= a.clusters[c];
+      else
+        total += share[c], ++open;
+    }
+    if (open == 0) break;
+    for (uint32_t c = 0; c < nc; ++c)
+      if (!fixed[c]) target[c] = total > 0 ? double(rest) * share[c] / total : double(rest) / open;
+    bool changed = false;
+    for (uint32_t c = 0; c < nc; ++c)
+      if (!fixed[c] && target[c] < a.minimum[c]) fixed[c] = 1, a.clusters[c] = a.minimum[c], changed = true;
+    if (changed) continue;
+    for (uint32_t c = 0; c < nc; ++c)
+      if (!fixed[c] && target[c] > a.faces[c]) fixed[c] = 1, a.clusters[c] = a.faces[c], changed = true;
+    if (!changed) break;
+  }
+  // Largest remainders for the components left open.
+  uint64_t assigned = 0;
+  std::vector<uint32_t> order;
+  for (uint32_t c = 0; c < nc; ++c) {
+    if (!fixed[c]) {
+      a.clusters[c] = std::clamp(uint32_t(std::floor(target[c])), a.minimum[c], a.faces[c]);
+      order.push_back(c);
+    }
+    assigned += a.clusters[c];
+  }
+  std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) {
+    double fx = target[x] - std::floor(target[x]), fy = target[y] - std::floor(target[y]);
+    return fx != fy ? fx > fy : x < y;
+  });
+  // Round-off may leave the sum a little off n either way; every component in the loop below has
+  // room (n <= faces, n >= minimums), so this ends with exactly n.
+  while (assigned < n) {
+    bool placed = false;
+    for (uint32_t c : order)
+      if (assigned < n && a.clusters[c] < a.faces[c]) ++a.clusters[c], ++assigned, placed = true;
+    for (uint32_t c = 0; c < nc && !placed; ++c)
+      if (a.clusters[c] < a.faces[c]) ++a.clusters[c], ++assigned, placed = true;
+    assert(placed);
+    if (!placed) break;
+  }
+  while (assigned > n) {
+    bool removed = false;
+    for (auto it = order.rbegin(); it != order.rend(); ++it)
+      if (assigned > n && a.clusters[*it] > a.minimum[*it]) --a.clusters[*it], --assigned, removed = true;
+    for (uint32_t c = 0; c < nc && !removed; ++c)
+      if (a.clusters[c] > a.minimum[c]) --a.clusters[c], --assigned, removed = true;
+    assert(removed);
+    if (!removed) break;
+  }
+  return a;
+}
+
+CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const CoarsenMeshOptions& options) {
+  if (!options.cluster.component_clusters.empty() || !options.cluster.initial_labels.empty())
+    throw OptionError("coarsen_mesh sets component_clusters and initial_labels itself: leave them empty");
+  const uint32_t n = options.cluster.clusters;
+  CoarsenMeshResult out;
+  out.allocation = allocate_component_clusters(mesh, topology, n, &options.cluster.density);
+
+  ClusterOptions co = options.cluster;
+  // One component: the plain clustering (its count is n anyway); several: the allocation.
+  if (topology.component_count > 1) co.component_clusters = out.allocation.clusters;
+  auto t = Clock::now();
+  Clustering clustering = cluster(mesh, topology, co);
+  out.cluster_seconds = seconds_since(t);
+
+  t = Clock::now();
+  const std::vector<float>* weights = options.cluster.density.empty() ? nullptr : &options.cluster.density;
+  std::vector<uint32_t> labels = clustering.labels;
+  out.initial_defects = find_dual_defects(mesh, topology, labels, n, options.coarsen, weights).size();
+  if (out.initial_defects > 0 && options.max_fix_rounds > 0) {
+    FaceData data = face_data(mesh, options.cluster.density);
+    RegionCheck check(mesh, topology, data);
+    ClusterCutter cutter(mesh, topology, data, check);
+    FixLoop loop(mesh, topology, options, data, check, cutter);
+    FixLoop::Outcome result = loop.run(labels, &clustering, co, true, 1);
+    out.fix_rounds = result.rounds;
+    out.fix_iterations = result.iterations;
+
+    // Components still broken (a ring around a thin handle needs changes on both its sides, a
+    // small component has no cluster to spare): a valid clustering with more clusters, where the
+    // parts are better resolved, merged back to n keeping it valid, replaces those components.
+    // Only manifold components: elsewhere no clustering gives a manifold dual, so no attempt pays.
+    auto broken_manifolds = [&](const std::vector<uint32_t>& l, uint32_t clusters, const std::vector<DualDefect>& d) {
+      std::vector<uint32_t> broken = defects_per_component(topology, l, clusters, d);
+      for (uint32_t c = 0; c < topology.component_count; ++c)
+        if (!out.allocation.manifold[c]) broken[c] = 0;
+      return broken;
+    };
+    auto any = [](const std::vector<uint32_t>& v) { return std::any_of(v.begin(), v.end(), [](uint32_t x) { return x > 0; }); };
+    const uint64_t faces = mesh.face_count();
+    for (uint64_t factor = 2; any(broken_manifolds(result.labels, n, result.defects)) && factor <= 32; factor *= 2) {
+      uint64_t finer = n * factor;
+      if (finer > faces / 4) break;  // clusters of fewer than 4 faces resolve nothing
+      ClusterOptions fo = co;
+      fo.clusters = uint32_t(finer);
+      std::vector<uint32_t> fine_counts =
+          allocate_component_clusters(mesh, topology, fo.clusters, &options.cluster.density).clusters;
+      if (topology.component_count > 1) fo.component_clusters = fine_counts;
+      Clustering fine = cluster(mesh, topology, fo);
+      out.fix_iterations += fine.iterations;
+      FixLoop::Outcome fixed = loop.run(fine.labels, &fine, fo, false, out.fix_rounds + 1);
+      out.fix_rounds += fixed.rounds;
+      std::vector<uint32_t> broken = broken_manifolds(result.labels, n, result.defects);
+      std::vector<uint32_t> broken_fine = defects_per_component(topology, fixed.labels, fo.clusters, fixed.defects);
+      std::vector<uint32_t> targets = fine_counts;  // components not merged back keep their count
+      for (uint32_t c = 0; c < topology.component_count; ++c)
+        if (broken[c] > 0 && broken_fine[c] == 0) targets[c] = out.allocation.clusters[c];
+      std::vector<uint32_t> merged = merge_down_twice(topology, data, check, fixed.labels, fo.clusters, targets);
+      uint32_t merged_count = *std::max_element(merged.begin(), merged.end()) + 1;
+      std::vector<uint32_t> held = clusters_per_component(topology, merged, merged_count);
+      std::vector<uint32_t> composed = result.labels;
+      uint32_t replaced = 0, merges = 0;
+      for (uint32_t c = 0; c < topology.component_count; ++c)
+        if (broken[c] > 0 && broken_fine[c] == 0 && held[c] == out.allocation.clusters[c]) {
+          replace_component(topology, composed, merged, c);
+          ++replaced;
+          merges += fine_counts[c] - out.allocation.clusters[c];
+        }
+      if (replaced == 0) {
+        out.abandoned_fixes += fixed.fixes.size();
+        continue;
+      }
+      FixLoop::Outcome back = loop.run(std::move(composed), nullptr, co, true, out.fix_rounds + 1);
+      out.fix_rounds += back.rounds;
+      out.fix_iterations += back.iterations;
+      if (back.defects.size() >= result.defects.size()) {
+        out.abandoned_fixes += fixed.fixes.size() + back.fixes.size();
+        continue;
+      }
+      out.refined_clusters = fo.clusters;
+      out.merged_back += merges;
+      result.fixes.insert(result.fixes.end(), fixed.fixes.begin(), fixed.fixes.end());
+      result.fixes.insert(result.fixes.end(), back.fixes.begin(), back.fixes.end());
+      back.fixes = std::move(result.fixes);
+      result = std::move(back);
+    }
+    // Last resort for small broken components: one cluster per face (a valid clustering of a
+    // manifold: faces are disks, two faces share at most one edge, vertices have valence >= 3)
+    // merged down to the component's count the same way.
+    std::vector<uint32_t> broken = broken_manifolds(result.labels, n, result.defects);
+    std::vector<uint32_t> direct = result.labels;
+    uint32_t next_id = n, selected = 0;
+    std::vector<uint32_t> targets = clusters_per_component(topology, result.labels, n);
+    for (uint32_t c = 0; c < topology.component_count; ++c)
+      if (broken[c] > 0 && out.allocation.faces[c] <= kMaxFacesPerFaceStart) {
+        targets[c] = out.allocation.clusters[c];
+        ++selected;
+      }
+    if (selected > 0) {
+      for (size_t f = 0; f < direct.size(); ++f) {
+        uint32_t c = topology.face_component[f];
+        if (broken[c] > 0 && out.allocation.faces[c] <= kMaxFacesPerFaceStart) direct[f] = next_id++;
+      }
+      std::vector<uint32_t> start_counts = clusters_per_component(topology, direct, next_id);
+      direct = merge_down_twice(topology, data, check, direct, next_id, targets);
+      uint32_t merged_count = *std::max_element(direct.begin(), direct.end()) + 1;
+      std::vector<uint32_t> held = clusters_per_component(topology, direct, merged_count);
+      std::vector<uint32_t> composed = result.labels;
+      uint32_t replaced = 0, merges = 0;
+      for (uint32_t c = 0; c < topology.component_count; ++c)
+        if (broken[c] > 0 && out.allocation.faces[c] <= kMaxFacesPerFaceStart && held[c] == out.allocation.clusters[c]) {
+          replace_component(topology, composed, direct, c);
+          ++replaced;
+          merges += start_counts[c] - held[c];
+        }
+      if (replaced > 0) {
+        FixLoop::Outcome back = loop.run(std::move(composed), nullptr, co, true, out.fix_rounds + 1);
+        out.fix_rounds += back.rounds;
+        out.fix_iterations += back.iterations;
+        if (back.defects.size() < result.defects.size()) {
+          out.merged_back += merges;
+          out.face_start_components = replaced;
+          result.fixes.insert(result.fixes.end(), back.fixes.begin(), back.fixes.end());
+          back.fixes = std::move(result.fixes);
+          result = std::move(back);
+        } else {
+          out.abandoned_fixes += back.fixes.size();
+        }
+      }
+    }
+    out.fixes = std::move(result.fixes);
+    if (result.clustering) {
+      clustering = std::move(*result.clustering);
+    } else {
+      // The clustering of the chosen labels without iterating: generators, and repair as a safety net.
+      ClusterOptions ro = co;
+      ro.topology = TopologyMode::preserving;
+      ro.initial_labels = std::move(result.labels);
+      ro.max_iterations = 0;
+      clustering = cluster(mesh, topology, ro);
+    }
+  }
+  out.fix_seconds = seconds_since(t);
+
+  t = Clock::now();
+  out.coarse = coarsen_clustering(mesh, topology, clustering.labels, n, options.coarsen, weights);
+  out.coarsen_seconds = seconds_since(t);
+  out.defects_remain = !out.coarse.defects.empty();
+  out.clustering = std::move(clustering);
+  return out;
+}
+
+const char* to_string(CoarsenFix::Action a) { return a == CoarsenFix::cut ? "cut" : "move_faces"; }
+
+}  // namespace meshcvt

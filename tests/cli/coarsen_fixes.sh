@@ -1,0 +1,114 @@
+#!/usr/bin/env bash
+# CLI test of the fix loop of `meshcvt coarsen` (coarsen_mesh): on the elephant (genus 3) the plain
+# clustering at these counts has dual defects; the output must still be a closed oriented manifold
+# with chi = -4 and exactly n vertices, all used (checked here in Python from the written OFF file,
+# independently of meshcvt), stdout must print the "fixes:" line, and the JSON report must record
+# every fix (kind, clusters, round) and the loop's summary. --fix-rounds 0 reports the defects
+# instead (a warning, defects_remain in the report). n below what the surface needs is exit 2 with
+# the numbers in the message, and writes nothing.
+# usage: coarsen_fixes.sh /path/to/meshcvt /path/to/tests/data
+set -euo pipefail
+cli=$1
+data=$2
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+check_off() {  # file n chi: closed, oriented, manifold, n vertices all used, Euler characteristic chi
+  python3 - "$@" <<'PY' || fail "output check failed for $1"
+import sys
+path, n, chi = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+tok = open(path).read().split()
+assert tok[0] == 'OFF', tok[0]
+nv, nf = int(tok[1]), int(tok[2])
+assert nv == n, f"{nv} vertices, wanted {n}"
+pos = 4 + 3 * nv
+faces = []
+for _ in range(nf):
+    k = int(tok[pos]); assert k == 3; faces.append(tuple(int(x) for x in tok[pos + 1:pos + 4])); pos += 4
+used = {v for f in faces for v in f}
+assert len(used) == n, f"{len(used)} of {n} vertices used"
+directed, undirected = {}, {}
+for f in faces:
+    assert len(set(f)) == 3, f
+    for i in range(3):
+        a, b = f[i], f[(i + 1) % 3]
+        directed[(a, b)] = directed.get((a, b), 0) + 1
+        e = (min(a, b), max(a, b))
+        undirected[e] = undirected.get(e, 0) + 1
+assert all(c == 2 for c in undirected.values()), "an edge not shared by exactly two triangles"
+assert all(c == 1 for c in directed.values()), "inconsistent orientation"
+# vertex links: one cycle each (no pinched vertex)
+link = {}
+for f in faces:
+    for i in range(3):
+        link.setdefault(f[i], []).append((f[(i + 1) % 3], f[(i + 2) % 3]))
+for v, edges in link.items():
+    nxt = dict(edges)
+    assert len(nxt) == len(edges), f"vertex {v}: fan not a cycle"
+    start = edges[0][0]; cur = nxt[start]; steps = 1
+    while cur != start:
+        cur = nxt[cur]; steps += 1
+        assert steps <= len(edges)
+    assert steps == len(edges), f"vertex {v} is pinched"
+got = nv - len(undirected) + nf
+assert got == chi, f"chi {got}, wanted {chi}"
+PY
+}
+
+for n in 50 300; do
+  "$cli" coarsen "$data/elephant.off" -n "$n" -o "$tmp/e$n.off" --device cpu --no-error \
+    --report "$tmp/e$n.json" >"$tmp/out$n" 2>"$tmp/err$n" || fail "coarsen -n $n failed: $(cat "$tmp/err$n")"
+  grep -q "^fixes: [0-9]*" "$tmp/out$n" || fail "no fixes line for n = $n: $(cat "$tmp/out$n")"
+  grep -q "defects -> 0" "$tmp/out$n" || fail "defects left for n = $n: $(cat "$tmp/out$n")"
+  grep -q "warning" "$tmp/err$n" && fail "warning for n = $n: $(cat "$tmp/err$n")"
+  check_off "$tmp/e$n.off" "$n" -4
+  python3 - "$tmp/e$n.json" "$n" <<'PY' || fail "report check failed for n = $2"
+import json, sys
+r = json.load(open(sys.argv[1])); n = int(sys.argv[2])
+loop = r['fix_loop']
+assert loop['remaining_defects'] == 0 and not loop['defects_remain'], loop
+assert loop['fixes'] == len(r['fixes']), (loop['fixes'], len(r['fixes']))
+assert loop['initial_defects'] == 0 or loop['fixes'] > 0 or loop['refined_clusters'] > 0, loop
+for f in r['fixes']:
+    assert f['action'] in ('cut', 'move_faces'), f
+    assert f['defect'] in ('cluster_not_disk', 'boundary_arcs', 'double_border', 'duplicate_triangle',
+                           'nonmanifold_output', 'inconsistent_orientation', 'missing_boundary_edge'), f
+    assert 1 <= f['round'] <= loop['rounds'], f
+    assert f['clusters'] in (n, loop['refined_clusters']), f
+    assert f['defect_clusters'] and all(0 <= c < f['clusters'] for c in f['defect_clusters']), f
+    if f['action'] == 'cut':
+        assert f['merged_into'] != f['freed'], f
+assert r['defects'] == [] and r['component_clusters'] == [n]
+assert r['output']['vertices'] == n and r['output']['euler_characteristic'] == -4
+assert r['output']['nonmanifold_edges'] == 0 and r['output']['nonmanifold_vertices'] == 0
+assert r['timings_s']['fix'] >= 0
+PY
+done
+
+# The plain clustering has defects at one of these counts at least (what makes the above able to fail).
+python3 - "$tmp/e50.json" "$tmp/e300.json" <<'PY' || fail "neither count needed a fix"
+import json, sys
+assert any(json.load(open(p))['fix_loop']['fixes'] > 0 for p in sys.argv[1:])
+PY
+
+# --fix-rounds 0: today's report-only behaviour, with a warning and the defects in the report
+"$cli" coarsen "$data/elephant.off" -n 300 -o "$tmp/raw.off" --device cpu --no-error --fix-rounds 0 \
+  --report "$tmp/raw.json" >"$tmp/out" 2>"$tmp/err" || fail "--fix-rounds 0 failed: $(cat "$tmp/err")"
+grep -q "warning: [1-9][0-9]* defects remain" "$tmp/err" || fail "no warning with --fix-rounds 0: $(cat "$tmp/err")"
+python3 - "$tmp/raw.json" <<'PY' || fail "report with --fix-rounds 0"
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r['fix_loop']['defects_remain'] and r['fixes'] == [] and len(r['defects']) == r['fix_loop']['remaining_defects'] > 0
+PY
+
+# n too small for a genus-3 surface (Heawood: 10 vertices at least): exit 2, numbers named, no output
+set +e
+"$cli" coarsen "$data/elephant.off" -n 9 -o "$tmp/small.off" --device cpu >"$tmp/out" 2>"$tmp/err"
+code=$?
+set -e
+[ "$code" = 2 ] || fail "n = 9 gave exit $code: $(cat "$tmp/err")"
+grep -q "n = 9 is too small" "$tmp/err" || fail "message: $(cat "$tmp/err")"
+grep -q "at least 10" "$tmp/err" || fail "message: $(cat "$tmp/err")"
+[ ! -e "$tmp/small.off" ] || fail "an output was written for n = 9"
+echo "ok"
