@@ -706,7 +706,11 @@ CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<
 CoarsenResult coarsen_clustering(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
                                  uint32_t clusters, const CoarsenOptions& options,
                                  const std::vector<float>* face_weights) {
-  return run(mesh, topology, labels, clusters, options, face_weights);
+  CoarsenResult result = run(mesh, topology, labels, clusters, options, face_weights);
+  // Flips need a clean manifold dual: with defects, edges may have more than two triangles.
+  if (options.flip_edges && result.defects.empty())
+    result.flipped_edges = flip_coarse_edges(result.mesh, options.flip_max_dihedral_deg);
+  return result;
 }
 
 std::vector<DualDefect> find_dual_defects(const Mesh& mesh, const Topology& topology,

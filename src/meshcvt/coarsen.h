@@ -32,7 +32,9 @@ enum class VertexPlacement {
   /// A cluster without such a vertex (a few faces) takes the closest corner of its faces that no
   /// lower-numbered cluster of that kind took (the closest corner if all are taken).
   closest,
-  /// The closest point of the whole mesh surface to c_i (the CCVT generator, the paper's eq. 6).
+  /// The closest point of the cluster's own faces to c_i: the CCVT generator (the paper's eq. 6)
+  /// restricted to the cluster, which on a surface is the closest point of the mesh unless another
+  /// part of it passes nearer. Exact point-triangle distances, one per face, O(F).
   projected,
   /// The point minimizing the sum of w_k * squared distance to the planes of the cluster's faces
   /// (Garland-Heckbert quadrics). Directions the quadric does not constrain (eigenvalues below
@@ -45,9 +47,13 @@ enum class VertexPlacement {
 struct CoarsenOptions {
   VertexPlacement placement = VertexPlacement::closest;
   /// 1: everything on the calling thread. Otherwise two independent passes run side by side on
-  /// meshes of 50k faces or more, and `projected` builds and queries its BVH on this many threads
-  /// (0: every core). The result does not depend on it.
+  /// meshes of 50k faces or more (0: every core). The result does not depend on it.
   unsigned threads = 0;
+  /// After building the dual: flip the shared edge of two adjacent, nearly coplanar triangles (normals
+  /// within `flip_max_dihedral_deg`) whenever that raises the smaller of their minimum angles (see
+  /// flip_coarse_edges). Vertices, topology and orientation are kept. Only when the dual has no defect.
+  bool flip_edges = true;
+  double flip_max_dihedral_deg = 25;
 };
 
 /// Something in a clustering that makes its dual mesh non-manifold or degenerate. `cluster`,
@@ -101,6 +107,7 @@ struct CoarsenResult {
   uint64_t polygons_triangulated = 0;  ///< polygons of >= 4 clusters split by max-min-angle
   uint64_t merged_triangles = 0;       ///< same-orientation duplicate triangles dropped
   uint64_t boundary_edges = 0;         ///< edges of the coarse mesh with one triangle
+  uint64_t flipped_edges = 0;          ///< edges flipped to improve triangles (CoarsenOptions::flip_edges)
 };
 
 /// Builds the dual mesh of a face clustering.
@@ -113,8 +120,8 @@ struct CoarsenResult {
 /// face_weights : optional density rho_k per face (face_count entries, finite, >= 0), weighting the
 ///                mass centroid and the quadrics; nullptr or empty means 1 everywhere.
 /// Returns the coarse mesh, its defects and counts. Throws OptionError when the sizes disagree, a
-/// label is >= clusters, or a weight is negative or not finite. O(F + V) time apart from the
-/// `projected` placement, which builds a triangle BVH (O(F log F)).
+/// label is >= clusters, or a weight is negative or not finite. O(F + V) time, plus the edge flips
+/// (a few linear passes over the coarse mesh's edges).
 CoarsenResult coarsen_clustering(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
                                  uint32_t clusters, const CoarsenOptions& options = {},
                                  const std::vector<float>* face_weights = nullptr);
@@ -122,11 +129,21 @@ CoarsenResult coarsen_clustering(const Mesh& mesh, const Topology& topology, con
 /// The defects coarsen_clustering would report for the same inputs (the identical list). Meant for
 /// a loop that fixes the clustering until this is empty. It costs about as much as
 /// coarsen_clustering (the triangles are built to check them; the mesh is not kept), which is
-/// linear and small next to clustering; with VertexPlacement::projected it includes the BVH build.
+/// linear and small next to clustering.
 std::vector<DualDefect> find_dual_defects(const Mesh& mesh, const Topology& topology,
                                           const std::vector<uint32_t>& labels, uint32_t clusters,
                                           const CoarsenOptions& options = {},
                                           const std::vector<float>* face_weights = nullptr);
+
+/// Improves a triangle mesh by edge flips (src/coarse_flips.cpp): the edge shared by triangles
+/// (u, v, c) and (v, u, d) becomes (c, d) when both are oriented consistently, (c, d) is not an
+/// edge yet, u and v keep >= 3 edges (2 on a boundary), the triangles' normals are within
+/// max_dihedral_deg degrees (creases are not cut), the new triangles face the same side, and the
+/// smaller minimum angle of the pair strictly grows. Passes over all edges (in sorted order:
+/// deterministic) until none flips, at most max_passes. Vertices, Euler characteristic, boundaries
+/// and orientation are unchanged; edges with one or more than two triangles are never flipped.
+/// Returns the number of flips. O(E) per pass.
+uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg = 25, uint32_t max_passes = 8);
 
 /// Step 1 alone: the coarse vertex of every cluster, 3 floats (x, y, z, input units) per cluster;
 /// (0, 0, 0) for a cluster with no face. The same points coarsen_clustering uses. Inputs and
