@@ -3,8 +3,8 @@
 //
 //   closest   : the cluster's mesh vertex nearest its mass centroid, the paper's choice (after
 //               Valette & Chassery [23]): it "conforms with the spirit of CCVT on a mesh".
-//   projected : the closest point of the surface to the mass centroid (the CCVT generator, eq. 6),
-//               found with the exact TriangleBvh.
+//   projected : the closest point of the cluster's own faces to the mass centroid (the CCVT
+//               generator, eq. 6, restricted to the cluster), exact point-triangle distances.
 //   qem       : the minimizer of the cluster's area-weighted plane quadric (Garland-Heckbert; the
 //               paper's second option, after [24]), solved by eigen-decomposition with small
 //               eigenvalues truncated toward the mass centroid (Lindstrom's robust solve), then
@@ -198,17 +198,31 @@ std::vector<float> place_closest(const Mesh& mesh, const std::vector<uint32_t>& 
   return positions;
 }
 
+// The closest point of the cluster's own faces to its mass centroid: one exact point-triangle test
+// per face, O(F) for all clusters and no search structure (a BVH over the whole mesh cost more than
+// the clustering of a small mesh). On a surface the centroid of a disk-shaped cluster lies over the
+// cluster, so this is the closest point of the surface unless another part of the mesh passes
+// nearer than the cluster's own faces; keeping the vertex on its own cluster is what the dual
+// wants anyway (vertices stay in cluster order, no two clusters trade places).
 std::vector<float> place_projected(const Mesh& mesh, uint32_t clusters, const std::vector<double>& centroids,
-                                   const std::vector<uint32_t>& labels, unsigned threads) {
-  std::vector<uint8_t> used(clusters, 0);
-  for (uint32_t label : labels) used[label] = 1;
-  TriangleBvh bvh(mesh, threads);
-  std::vector<TriangleBvh::Hit> hits(clusters);
-  bvh.closest_points(centroids.data(), clusters, hits.data(), threads);
+                                   const std::vector<uint32_t>& labels) {
+  std::vector<double> best_distance(clusters, -1.0), best_point(3 * size_t(clusters), 0.0);
+  for (uint32_t f = 0; f < labels.size(); ++f) {
+    const uint32_t c = labels[f];
+    double corner[3][3];
+    for (int j = 0; j < 3; ++j)
+      for (int d = 0; d < 3; ++d) corner[j][d] = vertex(mesh, mesh.indices[3 * size_t(f) + j])[d];
+    double point[3];
+    double d2 = closest_point_on_triangle(&centroids[3 * size_t(c)], corner[0], corner[1], corner[2], point);
+    if (best_distance[c] < 0 || d2 < best_distance[c]) {  // ties: the lower face id
+      best_distance[c] = d2;
+      for (int d = 0; d < 3; ++d) best_point[3 * size_t(c) + d] = point[d];
+    }
+  }
   std::vector<float> positions(3 * size_t(clusters), 0.0f);
   for (uint32_t i = 0; i < clusters; ++i)
-    if (used[i] && hits[i].face != kNone)
-      for (int d = 0; d < 3; ++d) positions[3 * size_t(i) + d] = hits[i].point[d];
+    if (best_distance[i] >= 0)
+      for (int d = 0; d < 3; ++d) positions[3 * size_t(i) + d] = float(best_point[3 * size_t(i) + d]);
   return positions;
 }
 
@@ -351,12 +365,12 @@ namespace detail {
 std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
                                           VertexPlacement placement, const std::vector<float>* face_weights,
                                           const std::vector<uint32_t>& vertex_cluster,
-                                          const std::vector<double>& centroids, unsigned threads) {
+                                          const std::vector<double>& centroids, unsigned /*threads*/) {
   switch (placement) {
     case VertexPlacement::closest:
       return place_closest(mesh, labels, clusters, centroids, vertex_cluster);
     case VertexPlacement::projected:
-      return place_projected(mesh, clusters, centroids, labels, threads);
+      return place_projected(mesh, clusters, centroids, labels);
     case VertexPlacement::qem:
       return place_qem(mesh, labels, clusters, centroids, face_weights);
   }
