@@ -15,6 +15,7 @@
 // step is kept only if it lowers the energy, so the energy never rises before the iteration starts.
 #include <algorithm>
 #include <cassert>
+#include <utility>
 
 #include "boundary_rule.h"
 #include "cluster_engine.h"
@@ -37,6 +38,50 @@ std::vector<float> generators_of(const ClusterProblem& problem, const std::vecto
   return g;
 }
 
+// Which clusters touch which, from the cluster edges of a labeling, in CSR form: counted, filled,
+// then each cluster's short list sorted and deduplicated (a global sort of the edge pairs costs
+// more than a Lloyd step). `open`: the cluster has a boundary or non-manifold edge.
+struct ClusterGraph {
+  std::vector<uint32_t> offsets, neighbours, count;
+  std::vector<uint8_t> open;
+};
+
+void build_cluster_graph(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t nc, ClusterGraph& g) {
+  const uint32_t nf = uint32_t(labels.size());
+  const uint32_t* adjacent = topology.face_adjacent.data();
+  g.offsets.assign(nc + 1, 0);
+  g.open.assign(nc, 0);
+  for (uint32_t f = 0; f < nf; ++f)
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = adjacent[3 * size_t(f) + e];
+      if (o == kNone) g.open[labels[f]] = 1;
+      else if (labels[o] != labels[f]) ++g.offsets[labels[f] + 1];
+    }
+  for (uint32_t c = 0; c < nc; ++c) g.offsets[c + 1] += g.offsets[c];
+  g.neighbours.resize(g.offsets[nc]);
+  std::vector<uint32_t> fill(g.offsets.begin(), g.offsets.end() - 1);
+  for (uint32_t f = 0; f < nf; ++f)
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = adjacent[3 * size_t(f) + e];
+      if (o != kNone && labels[o] != labels[f]) g.neighbours[fill[labels[f]]++] = labels[o];
+    }
+  g.count.assign(nc, 0);
+  for (uint32_t c = 0; c < nc; ++c) {
+    auto begin = g.neighbours.begin() + g.offsets[c], end = g.neighbours.begin() + g.offsets[c + 1];
+    std::sort(begin, end);
+    g.count[c] = uint32_t(std::unique(begin, end) - begin);
+  }
+}
+
+// Clusters enclosed by exactly one other cluster that has other neighbours (as check_clusters
+// counts them: a cluster touching a boundary is not enclosed).
+uint32_t enclosed_clusters(const ClusterGraph& g) {
+  uint32_t enclosed = 0;
+  for (size_t c = 0; c < g.count.size(); ++c)
+    if (!g.open[c] && g.count[c] == 1 && g.count[g.neighbours[g.offsets[c]]] >= 2) ++enclosed;
+  return enclosed;
+}
+
 // One Lloyd step from `generators`, writing the new labels to `out`:
 //  1. every face takes the closest generator among its cluster and the clusters adjacent to it
 //     (a generator moves by less than a cluster's width per step, so the closest one is nearly
@@ -46,32 +91,15 @@ std::vector<float> generators_of(const ClusterProblem& problem, const std::vecto
 //     order), to the cluster of the neighbour that reaches them first.
 // Returns false when a cluster would end up empty (the step is then not used).
 bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const std::vector<uint32_t>& labels,
-                  const std::vector<float>& generators, WorkerPool& pool, std::vector<uint32_t>& out) {
+                  const ClusterGraph& graph, const std::vector<float>& generators, WorkerPool& pool,
+                  std::vector<uint32_t>& out) {
   const uint32_t nf = problem.face_count, nc = problem.clusters;
   const float* point = problem.point.data();
   const uint32_t* adjacent = topology.face_adjacent.data();
   auto distance = [&](uint32_t f, uint32_t c) { return squared_distance(point + 3 * size_t(f), &generators[3 * size_t(c)]); };
-
-  // Cluster adjacency in CSR form from the cluster edges: counted, filled, then each cluster's
-  // short list sorted and deduplicated (a global sort of the edge pairs costs more than a step).
-  std::vector<uint32_t> offsets(nc + 1, 0);
-  auto for_each_cluster_edge = [&](auto&& fn) {
-    for (uint32_t f = 0; f < nf; ++f)
-      for (int e = 0; e < 3; ++e) {
-        uint32_t g = adjacent[3 * size_t(f) + e];
-        if (g != kNone && labels[g] != labels[f]) fn(labels[f], labels[g]);
-      }
-  };
-  for_each_cluster_edge([&](uint32_t a, uint32_t) { ++offsets[a + 1]; });
-  for (uint32_t c = 0; c < nc; ++c) offsets[c + 1] += offsets[c];
-  std::vector<uint32_t> neighbours(offsets[nc]), fill(offsets.begin(), offsets.end() - 1);
-  for_each_cluster_edge([&](uint32_t a, uint32_t b) { neighbours[fill[a]++] = b; });
-  std::vector<uint32_t> count(nc, 0);
-  for (uint32_t c = 0; c < nc; ++c) {
-    auto begin = neighbours.begin() + offsets[c], end = neighbours.begin() + offsets[c + 1];
-    std::sort(begin, end);
-    count[c] = uint32_t(std::unique(begin, end) - begin);
-  }
+  const std::vector<uint32_t>& offsets = graph.offsets;
+  const std::vector<uint32_t>& neighbours = graph.neighbours;
+  const std::vector<uint32_t>& count = graph.count;
 
   // A face closer to its own generator than half the distance to the nearest adjacent generator
   // cannot be closer to another (triangle inequality): most faces need one distance. The bound is
@@ -204,14 +232,18 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
   std::vector<int64_t> sums = compute_cluster_sums(problem, labels, problem.clusters);
   std::vector<float> generators = generators_of(problem, sums);
   double energy = total_energy(problem, sums, generators);
-  const uint32_t isolated = check_clusters(topology, labels, problem.clusters).isolated;
+  ClusterGraph graph, next_graph;
+  build_cluster_graph(topology, labels, problem.clusters, graph);
+  const uint32_t enclosed = enclosed_clusters(graph);
   std::vector<uint32_t> next;
   uint32_t kept = 0;
   for (uint32_t step = 0; step < max_steps; ++step) {
-    if (!voronoi_step(problem, topology, labels, generators, pool, next)) break;
+    if (!voronoi_step(problem, topology, labels, graph, generators, pool, next)) break;
     // A cluster enclosed by one other (the other an annulus around it) would stay so under the
-    // topology-preserving iteration until repair dissolves it; such a step is not taken.
-    if (check_clusters(topology, next, problem.clusters).isolated > isolated) break;
+    // topology-preserving iteration until repair dissolves it; such a step is not taken. The
+    // graph of the new labels is also the next step's list of candidate clusters.
+    build_cluster_graph(topology, next, problem.clusters, next_graph);
+    if (enclosed_clusters(next_graph) > enclosed) break;
     // Sums by the centroid variations of the faces that changed cluster (eq. 8), as the
     // iteration does: exact integers, and far fewer faces than a recount.
     std::vector<int64_t> next_sums = sums;
@@ -229,6 +261,7 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
     if (!(next_energy < energy)) break;
     double gain = (energy - next_energy) / energy;
     labels.swap(next);
+    std::swap(graph, next_graph);
     sums.swap(next_sums);
     generators.swap(next_generators);
     energy = next_energy;
