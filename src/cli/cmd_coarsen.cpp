@@ -23,7 +23,7 @@ namespace meshcvt::cli {
 namespace {
 
 struct CoarsenArgs {
-  std::string input, output, report, metric = "cvt", placement = "closest", device;
+  std::string input, output, report, metric = "cvt", placement = "projected", device;
   uint32_t clusters = 0, fix_rounds = CoarsenMeshOptions{}.max_fix_rounds;
   unsigned threads = 0;
   bool quiet = false, no_weld = false, no_error = false, no_flips = false;
@@ -227,7 +227,7 @@ const RegisterCommand reg(30, [](CLI::App& app) {
   sub->add_option("-n,--vertices", a->clusters, "vertices of the coarse mesh (= clusters)")->required();
   sub->add_option("-o,--output", a->output, "coarse mesh (.obj .off .ply .stl)")->required();
   sub->add_option("--metric", a->metric, "cvt | ccvt (default cvt)");
-  sub->add_option("--vertex", a->placement, "closest (default) | projected | qem: where each cluster's vertex goes");
+  sub->add_option("--vertex", a->placement, "projected (default: closest point of the cluster to its centroid) | closest (the paper: the cluster's mesh vertex nearest its centroid) | qem");
   sub->add_option("--gradation", a->gradation,
                   "curvature-adaptive density: 0 uniform (default), larger = more, smaller triangles where the "
                   "surface bends (edge length ~ (1 + curvature x diagonal)^(-g/4))");
