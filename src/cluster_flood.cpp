@@ -176,21 +176,24 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
       if (seed[c] == kNone) return false;  // a forced face was another cluster's only one
   }
 
-  // Keep each cluster's piece around its seed; the rest become orphans (kNone).
+  // Keep each cluster's piece around its seed; the rest become orphans. One cluster at a time, so
+  // the walk stays inside one region of the mesh (a joint walk from all seeds hops between clusters
+  // at every step and missed the cache on the 1.2M bunny); the pieces are the same either way.
   std::vector<uint8_t> kept(nf, 0);
   std::vector<uint32_t> queue;
   queue.reserve(nf);
   for (uint32_t c = 0; c < nc; ++c) {
+    size_t head = queue.size();
     kept[seed[c]] = 1;
     queue.push_back(seed[c]);
-  }
-  for (size_t head = 0; head < queue.size(); ++head) {
-    uint32_t f = queue[head];
-    for (int e = 0; e < 3; ++e) {
-      uint32_t g = adjacent[3 * size_t(f) + e];
-      if (g != kNone && !kept[g] && out[g] == out[f]) {
-        kept[g] = 1;
-        queue.push_back(g);
+    for (; head < queue.size(); ++head) {
+      uint32_t f = queue[head];
+      for (int e = 0; e < 3; ++e) {
+        uint32_t g = adjacent[3 * size_t(f) + e];
+        if (g != kNone && !kept[g] && out[g] == c) {
+          kept[g] = 1;
+          queue.push_back(g);
+        }
       }
     }
   }
