@@ -58,17 +58,18 @@ struct DualGraph {
 // 0.1613 / 354 -> 0.1616 / 150. Weights 0.1 and 1 were worse on bunny00 (513 and 316 iterations).
 constexpr double kL21PositionWeight = 0.01;
 
-// F(e_ij) from the nodes' weights and mean points z = S / W (dims 3). With dims 6 (l21), the
-// second triple is the mean centroid and adds kL21PositionWeight times the same cost in positions.
-float contraction_cost(const std::vector<double>& weight, const std::vector<double>& mean, int dims, uint32_t i,
+// F(e_ij) from the nodes' weights and sums S (mean points z = S / W, computed here rather than
+// stored: an array of means was 24 bytes per face at the peak of the initialization). dims 3; with
+// dims 6 (l21) the second triple is the centroid sum and adds kL21PositionWeight times the same
+// cost in positions.
+float contraction_cost(const std::vector<double>& weight, const std::vector<double>& sum, int dims, uint32_t i,
                        uint32_t j) {
   double wi = weight[i], wj = weight[j];
   if (!(wi > 0) || !(wj > 0)) return 0.0f;  // weightless faces merge for free
   auto squared = [&](int k) {
-    double dx = mean[dims * size_t(i) + k] - mean[dims * size_t(j) + k];
-    double dy = mean[dims * size_t(i) + k + 1] - mean[dims * size_t(j) + k + 1];
-    double dz = mean[dims * size_t(i) + k + 2] - mean[dims * size_t(j) + k + 2];
-    return dx * dx + dy * dy + dz * dz;
+    double d[3];
+    for (int c = 0; c < 3; ++c) d[c] = sum[dims * size_t(i) + k + c] / wi - sum[dims * size_t(j) + k + c] / wj;
+    return d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
   };
   double d2 = squared(0);
   if (dims == 6) d2 += kL21PositionWeight * squared(3);
@@ -89,12 +90,8 @@ bool edge_before(float ca, const DualEdge& a, float cb, const DualEdge& b) {
 std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
   const size_t ne = g.edges.size();
   const int dims = g.dims;
-  std::vector<double> mean(dims * size_t(g.nodes));
-  for (uint32_t n = 0; n < g.nodes; ++n)
-    for (int c = 0; c < dims; ++c)
-      mean[dims * size_t(n) + c] = g.weight[n] > 0 ? g.sum[dims * size_t(n) + c] / g.weight[n] : 0.0;
   std::vector<float> cost(ne);
-  for (size_t e = 0; e < ne; ++e) cost[e] = contraction_cost(g.weight, mean, dims, g.edges[e].a, g.edges[e].b);
+  for (size_t e = 0; e < ne; ++e) cost[e] = contraction_cost(g.weight, g.sum, dims, g.edges[e].a, g.edges[e].b);
 
   // Passes of "mutually cheapest among the still unmatched" grow a matching until it is maximal
   // (or big enough): the costs stay those of the round's start, so one round does the work of
@@ -134,6 +131,13 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
     chosen.resize(wanted);
   }
 
+  // The matching's scratch is dead from here on; freed now, it does not add to the peak of the
+  // edge rebuild below (17 bytes per face on the first round).
+  std::vector<float>().swap(cost);
+  std::vector<uint32_t>().swap(open_edges);
+  std::vector<uint32_t>().swap(best);
+  std::vector<uint8_t>().swap(matched);
+
   // partner of each node in the matching
   std::vector<uint32_t> partner(g.nodes, kNone);
   for (uint32_t e : chosen) {
@@ -148,11 +152,27 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
     if (partner[node] != kNone) relabel[partner[node]] = next;
     ++next;
   }
-  std::vector<double> weight(next, 0.0), sum(dims * size_t(next), 0.0);
-  for (uint32_t node = 0; node < g.nodes; ++node) {
-    uint32_t r = relabel[node];
-    weight[r] += g.weight[node];
-    for (int c = 0; c < dims; ++c) sum[dims * size_t(r) + c] += g.sum[dims * size_t(node) + c];
+  // Merged weights and sums, in place: new ids are given in increasing order of a group's lowest
+  // old id, so r = relabel[node] <= node and slot r has already been read when node is reached.
+  // (Separate arrays cost 32 bytes per face at the peak.) The group's lowest member starts the sum.
+  {
+    std::vector<uint8_t> started(next, 0);
+    for (uint32_t node = 0; node < g.nodes; ++node) {
+      uint32_t r = relabel[node];
+      assert(r <= node);
+      if (!started[r]) {
+        started[r] = 1;
+        g.weight[r] = g.weight[node];
+        for (int c = 0; c < dims; ++c) g.sum[dims * size_t(r) + c] = g.sum[dims * size_t(node) + c];
+      } else {
+        g.weight[r] += g.weight[node];
+        for (int c = 0; c < dims; ++c) g.sum[dims * size_t(r) + c] += g.sum[dims * size_t(node) + c];
+      }
+    }
+    g.weight.resize(next);
+    g.sum.resize(dims * size_t(next));
+    g.weight.shrink_to_fit();
+    g.sum.shrink_to_fit();
   }
   // New edges without self-loops and without repeats (several mesh edges between two merged
   // clusters), so edge lists shrink with the node count: a counting sort by the lower end, then a
@@ -180,8 +200,6 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
     }
   }
   g.edges.resize(kept);
-  g.weight.swap(weight);
-  g.sum.swap(sum);
   g.nodes = next;
   return relabel;
 }
@@ -194,9 +212,11 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
                                               const std::vector<uint32_t>* local_of = nullptr) {
   const uint32_t nf = subset ? uint32_t(subset->size()) : problem.face_count;
   auto face_of = [&](uint32_t node) { return subset ? (*subset)[node] : node; };
-  std::vector<uint32_t> labels(nf);
-  std::iota(labels.begin(), labels.end(), 0u);
-  if (clusters >= nf) return labels;
+  if (clusters >= nf) {
+    std::vector<uint32_t> labels(nf);
+    std::iota(labels.begin(), labels.end(), 0u);
+    return labels;
+  }
 
   DualGraph g;
   g.nodes = nf;
@@ -245,8 +265,8 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
     const std::vector<uint32_t>& above = relabels[r];
     for (uint32_t& id : below) id = above[id];
   }
-  if (!relabels.empty()) labels = std::move(relabels[0]);
-  return labels;
+  assert(!relabels.empty());  // clusters < nf: at least one round
+  return std::move(relabels[0]);
 }
 
 uint64_t splitmix64(uint64_t& state) {
