@@ -55,6 +55,7 @@
 
 #include "meshcvt/coarsen.h"
 #include "meshcvt/error.h"
+#include "symmetric_eigen3.h"
 
 namespace meshcvt {
 
@@ -265,40 +266,15 @@ ClusterView view_of(const Topology& topology, const FaceData& data, const std::v
   return v;
 }
 
-// Eigenvectors of a symmetric 3x3 matrix by cyclic Jacobi rotations, ordered by decreasing
-// eigenvalue (rows of `vectors`). A fixed number of sweeps: deterministic, and 3x3 converges fast.
-void symmetric_eigenvectors(double a[3][3], double vectors[3][3]) {
-  double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  for (int sweep = 0; sweep < 16; ++sweep) {
-    double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
-    if (!(off > 1e-30 * (a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2]))) break;
-    for (int p = 0; p < 2; ++p)
-      for (int q = p + 1; q < 3; ++q) {
-        if (a[p][q] == 0) continue;
-        double theta = (a[q][q] - a[p][p]) / (2 * a[p][q]);
-        double t = (theta >= 0 ? 1 : -1) / (std::fabs(theta) + std::sqrt(theta * theta + 1));
-        double c = 1 / std::sqrt(t * t + 1), s = t * c;
-        for (int k = 0; k < 3; ++k) {  // A <- A J (columns p, q)
-          double akp = a[k][p], akq = a[k][q];
-          a[k][p] = c * akp - s * akq;
-          a[k][q] = s * akp + c * akq;
-        }
-        for (int k = 0; k < 3; ++k) {  // A <- J^T A (rows p, q)
-          double apk = a[p][k], aqk = a[q][k];
-          a[p][k] = c * apk - s * aqk;
-          a[q][k] = s * apk + c * aqk;
-        }
-        for (int k = 0; k < 3; ++k) {  // V <- V J
-          double vkp = v[k][p], vkq = v[k][q];
-          v[k][p] = c * vkp - s * vkq;
-          v[k][q] = s * vkp + c * vkq;
-        }
-      }
-  }
+// Eigenvectors of a symmetric 3x3 matrix (symmetric_eigen3.h), ordered by decreasing eigenvalue
+// (rows of `vectors`; ties by index, so the order is deterministic).
+void symmetric_eigenvectors(const double a[3][3], double vectors[3][3]) {
+  double values[3], columns[3][3];
+  symmetric_eigen3(a, values, columns);
   int order[3] = {0, 1, 2};
-  std::sort(order, order + 3, [&](int x, int y) { return a[x][x] != a[y][y] ? a[x][x] > a[y][y] : x < y; });
+  std::sort(order, order + 3, [&](int x, int y) { return values[x] != values[y] ? values[x] > values[y] : x < y; });
   for (int i = 0; i < 3; ++i)
-    for (int k = 0; k < 3; ++k) vectors[i][k] = v[k][order[i]];
+    for (int k = 0; k < 3; ++k) vectors[i][k] = columns[k][order[i]];
 }
 
 // Scores sets of faces as the clusters they would become, next to the other clusters of `labels`.
