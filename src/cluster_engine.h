@@ -66,6 +66,21 @@ std::vector<uint32_t> initial_clustering(const ClusterProblem& problem, const Me
                                          Init init, uint32_t clusters, uint64_t seed,
                                          const std::vector<uint32_t>* component_clusters = nullptr);
 
+/// Which clusters touch which (cluster_graph.cpp). The neighbours of cluster c, sorted and unique,
+/// are neighbours[offsets[c] .. offsets[c] + count[c]); open[c]: c has a boundary or non-manifold
+/// edge (face_adjacent kNone).
+struct ClusterGraph {
+  std::vector<uint32_t> offsets, neighbours, count;
+  std::vector<uint8_t> open;
+};
+void build_cluster_graph(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t clusters,
+                         ClusterGraph& graph);
+
+/// Clusters enclosed by exactly one other cluster that itself has other neighbours ("isolated"). A
+/// cluster that reaches a boundary (or non-manifold) edge is not enclosed: the end of a strip
+/// touches one neighbour and is still a disk. Increasing cluster order.
+std::vector<uint32_t> enclosed_clusters(const ClusterGraph& graph);
+
 /// Lloyd steps by constrained flooding (cluster_flood.cpp): at most `max_steps`, each kept only if it
 /// lowers the energy, stopping once a step gains less than `min_relative_gain` of the energy.
 /// Clusters stay non-empty and connected. Returns the number of steps kept.

@@ -38,50 +38,6 @@ std::vector<float> generators_of(const ClusterProblem& problem, const std::vecto
   return g;
 }
 
-// Which clusters touch which, from the cluster edges of a labeling, in CSR form: counted, filled,
-// then each cluster's short list sorted and deduplicated (a global sort of the edge pairs costs
-// more than a Lloyd step). `open`: the cluster has a boundary or non-manifold edge.
-struct ClusterGraph {
-  std::vector<uint32_t> offsets, neighbours, count;
-  std::vector<uint8_t> open;
-};
-
-void build_cluster_graph(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t nc, ClusterGraph& g) {
-  const uint32_t nf = uint32_t(labels.size());
-  const uint32_t* adjacent = topology.face_adjacent.data();
-  g.offsets.assign(nc + 1, 0);
-  g.open.assign(nc, 0);
-  for (uint32_t f = 0; f < nf; ++f)
-    for (int e = 0; e < 3; ++e) {
-      uint32_t o = adjacent[3 * size_t(f) + e];
-      if (o == kNone) g.open[labels[f]] = 1;
-      else if (labels[o] != labels[f]) ++g.offsets[labels[f] + 1];
-    }
-  for (uint32_t c = 0; c < nc; ++c) g.offsets[c + 1] += g.offsets[c];
-  g.neighbours.resize(g.offsets[nc]);
-  std::vector<uint32_t> fill(g.offsets.begin(), g.offsets.end() - 1);
-  for (uint32_t f = 0; f < nf; ++f)
-    for (int e = 0; e < 3; ++e) {
-      uint32_t o = adjacent[3 * size_t(f) + e];
-      if (o != kNone && labels[o] != labels[f]) g.neighbours[fill[labels[f]]++] = labels[o];
-    }
-  g.count.assign(nc, 0);
-  for (uint32_t c = 0; c < nc; ++c) {
-    auto begin = g.neighbours.begin() + g.offsets[c], end = g.neighbours.begin() + g.offsets[c + 1];
-    std::sort(begin, end);
-    g.count[c] = uint32_t(std::unique(begin, end) - begin);
-  }
-}
-
-// Clusters enclosed by exactly one other cluster that has other neighbours (as check_clusters
-// counts them: a cluster touching a boundary is not enclosed).
-uint32_t enclosed_clusters(const ClusterGraph& g) {
-  uint32_t enclosed = 0;
-  for (size_t c = 0; c < g.count.size(); ++c)
-    if (!g.open[c] && g.count[c] == 1 && g.count[g.neighbours[g.offsets[c]]] >= 2) ++enclosed;
-  return enclosed;
-}
-
 // One Lloyd step from `generators`, writing the new labels to `out`:
 //  1. every face takes the closest generator among its cluster and the clusters adjacent to it
 //     (a generator moves by less than a cluster's width per step, so the closest one is nearly
@@ -237,7 +193,7 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
   double energy = total_energy(problem, sums, generators);
   ClusterGraph graph, next_graph;
   build_cluster_graph(topology, labels, problem.clusters, graph);
-  const uint32_t enclosed = enclosed_clusters(graph);
+  const size_t enclosed = enclosed_clusters(graph).size();
   std::vector<uint32_t> next;
   uint32_t kept = 0;
   for (uint32_t step = 0; step < max_steps; ++step) {
@@ -246,7 +202,7 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
     // topology-preserving iteration until repair dissolves it; such a step is not taken. The
     // graph of the new labels is also the next step's list of candidate clusters.
     build_cluster_graph(topology, next, problem.clusters, next_graph);
-    if (enclosed_clusters(next_graph) > enclosed) break;
+    if (enclosed_clusters(next_graph).size() > enclosed) break;
     // Sums by the centroid variations of the faces that changed cluster (eq. 8), as the
     // iteration does: exact integers, and far fewer faces than a recount.
     std::vector<int64_t> next_sums = sums;

@@ -51,43 +51,12 @@ std::vector<uint32_t> cluster_pieces(const Topology& topology, const std::vector
   return piece;
 }
 
-// Sorted, unique list of the clusters adjacent to each cluster, as CSR.
-void cluster_adjacency(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t clusters,
-                       std::vector<uint32_t>& offsets, std::vector<uint32_t>& neighbours) {
-  std::vector<uint64_t> pairs;
-  for (uint32_t f = 0; f < labels.size(); ++f)
-    for (int e = 0; e < 3; ++e) {
-      uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
-      if (o != kNone && labels[o] != labels[f]) pairs.push_back(uint64_t(labels[f]) << 32 | labels[o]);
-    }
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-  offsets.assign(size_t(clusters) + 1, 0);
-  neighbours.resize(pairs.size());
-  for (size_t i = 0; i < pairs.size(); ++i) {
-    ++offsets[(pairs[i] >> 32) + 1];
-    neighbours[i] = uint32_t(pairs[i]);
-  }
-  for (uint32_t c = 0; c < clusters; ++c) offsets[c + 1] += offsets[c];
-}
-
-// Clusters enclosed by exactly one other cluster that itself has other neighbours. A cluster that
-// reaches a boundary (or non-manifold) edge is not enclosed: the end of a strip touches one
-// neighbour and is still a disk.
+// Isolated clusters (see enclosed_clusters).
 std::vector<uint32_t> isolated_clusters(const Topology& topology, const std::vector<uint32_t>& labels,
                                         uint32_t clusters) {
-  std::vector<uint32_t> offsets, neighbours, result;
-  cluster_adjacency(topology, labels, clusters, offsets, neighbours);
-  std::vector<uint8_t> open(clusters, 0);
-  for (uint32_t f = 0; f < labels.size(); ++f)
-    for (int e = 0; e < 3; ++e)
-      if (topology.face_adjacent[3 * size_t(f) + e] == kNone) open[labels[f]] = 1;
-  for (uint32_t c = 0; c < clusters; ++c) {
-    if (open[c] || offsets[c + 1] - offsets[c] != 1) continue;
-    uint32_t outer = neighbours[offsets[c]];
-    if (offsets[outer + 1] - offsets[outer] >= 2) result.push_back(c);
-  }
-  return result;
+  ClusterGraph graph;
+  build_cluster_graph(topology, labels, clusters, graph);
+  return enclosed_clusters(graph);
 }
 
 }  // namespace
