@@ -120,6 +120,11 @@ void run_coarsen(const CoarsenArgs& a) {
   }
   options.density = std::move(density);  // coarsen_mesh weighs both the clusters and the dual with it
   const double prepare_s = seconds(t0);
+  // The library's message names the numbers; the command line also knows the remedy.
+  if (a.clusters > mesh.face_count() && subdivision_levels == 0)
+    throw OptionError("cannot make " + std::to_string(a.clusters) + " vertices from the " +
+                      std::to_string(mesh.face_count()) + " faces of " + a.input +
+                      ": ask for fewer, or add --subdivide auto to refine the input first");
   Topology topology = build_topology(mesh);
   // The whole job (coarsen_mesh.cpp): clusters per component, clustering, fixes until the dual is a
   // valid manifold, the dual.

@@ -98,6 +98,8 @@ rc=$?
 set -e
 [ $rc -eq 2 ] || fail "20 faces -> 30 vertices without --subdivide: expected exit 2, got $rc"
 [ ! -e "$tmp/plain.off" ] || fail "a refused run left an output file"
+grep -q "30 vertices from the 20 faces" "$tmp/err" || fail "the refusal should name the numbers: $(cat "$tmp/err")"
+grep -q -- "--subdivide auto" "$tmp/err" || fail "the refusal should name the remedy: $(cat "$tmp/err")"
 
 # ---- --subdivide auto: 2 levels, exactly 30 vertices, a valid closed mesh
 "$cli" coarsen "$tmp/ico.off" -n 30 -o "$tmp/auto.off" --subdivide auto --report "$tmp/auto.json" >"$tmp/out" ||
