@@ -142,10 +142,8 @@ class BoundaryIteration final : public IterationEngine {
   std::vector<uint8_t> cluster_changed_;     // flag per cluster, set for those in changed_clusters_
   std::vector<uint32_t> changed_clusters_;   // clusters whose generator the last iteration changed
   std::vector<uint32_t> dirty_faces_;        // faces moved, next to a move, or refused last time
-  std::vector<std::vector<uint32_t>> border_lists_;  // per cluster: its border faces (lazily compacted)
-  std::vector<uint32_t> list_owner_;         // per face: the cluster whose border list holds it, or kNone
   std::vector<uint32_t> active_;             // faces to test in this iteration
-  std::vector<uint32_t> active_stamp_, list_stamp_;  // dedupe marks, compared with stamp_
+  std::vector<uint32_t> active_stamp_;       // dedupe mark, compared with stamp_
   uint32_t stamp_ = 0;
   std::vector<uint32_t> destination_;     // per face: proposed cluster or kNone (scratch)
   std::vector<uint8_t> proposal_state_;   // per face: 0 none, 1 proposed, 2 passed the disk tests

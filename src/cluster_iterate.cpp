@@ -249,15 +249,7 @@ void BoundaryIteration::reset(std::vector<uint32_t> labels) {
   for (uint32_t c = 0; c < nc; ++c) changed_clusters_[c] = c;
   dirty_faces_.clear();
   active_stamp_.assign(nf, 0);
-  list_stamp_.assign(nf, 0);
   stamp_ = 0;
-  border_lists_.assign(nc, {});
-  list_owner_.assign(nf, kNone);
-  for (uint32_t f = 0; f < nf; ++f)
-    if (is_border(f)) {
-      border_lists_[labels_[f]].push_back(f);
-      list_owner_[f] = labels_[f];
-    }
   worker_moves_.assign(pool_.size(), {});
   worker_rings_.assign(pool_.size(), {});
   worker_evaluated_.assign(pool_.size(), 0);
@@ -353,10 +345,10 @@ bool BoundaryIteration::is_border(uint32_t f) const {
 }
 
 // The faces to test this iteration: faces marked dirty by the last one (moved, next to a move, or
-// refused), and the border faces of every cluster whose generator changed together with their
-// neighbours across the border (their decisions read that generator). Without the accelerator,
-// every border face. Each cluster's border list is compacted on the way (faces that left or
-// stopped being border faces are dropped; they are re-added when a move touches them).
+// refused), and the faces whose watches fired (a generator they read has moved by their budget).
+// The first iteration after reset, and every iteration without the accelerator: every border face,
+// found by one pass over all faces (kept per-cluster border lists cost 12-16 bytes per face for a
+// pass that the margin accelerator needs once per reset).
 void BoundaryIteration::collect_active_faces() {
   active_.clear();
   ++stamp_;
@@ -366,32 +358,17 @@ void BoundaryIteration::collect_active_faces() {
       active_.push_back(f);
     }
   };
-  auto scan = [&](uint32_t c, bool with_neighbours) {
-    std::vector<uint32_t>& list = border_lists_[c];
-    size_t kept = 0;
-    for (uint32_t f : list) {
-      if (labels_[f] != c || list_stamp_[f] == stamp_ || !is_border(f)) {
-        if (labels_[f] == c && list_stamp_[f] != stamp_) list_owner_[f] = kNone;  // no longer a border face
-        continue;
-      }
-      list_stamp_[f] = stamp_;
-      list[kept++] = f;
-      add(f);
-      if (!with_neighbours) continue;
-      for (int e = 0; e < 3; ++e) {
-        uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
-        if (o != kNone && labels_[o] != c) add(o);
-      }
-    }
-    list.resize(kept);
+  auto every_border_face = [&] {
+    for (uint32_t f = 0; f < problem_.face_count; ++f)
+      if (is_border(f)) add(f);
   };
   if (!accelerate_) {
-    for (uint32_t c = 0; c < problem_.clusters; ++c) scan(c, false);
+    every_border_face();
     return;
   }
   for (uint32_t f : dirty_faces_) add(f);
-  if (iteration_ == 1) {  // first iteration after reset: every border face
-    for (uint32_t c = 0; c < problem_.clusters; ++c) scan(c, false);
+  if (iteration_ == 1) {  // first iteration after reset
+    every_border_face();
     return;
   }
   // Buckets whose cluster moved by their lower bound since their last flush: a face in the bucket
@@ -579,14 +556,8 @@ IterationRecord BoundaryIteration::step() {
   }
   record.moves = moved.size();
 
-  // Moved faces and their neighbours: inputs changed, and they may have become border faces.
-  auto touch = [&](uint32_t f) {
-    dirty_faces_.push_back(f);
-    if (list_owner_[f] != labels_[f] && is_border(f)) {
-      list_owner_[f] = labels_[f];
-      border_lists_[labels_[f]].push_back(f);
-    }
-  };
+  // Moved faces and their neighbours: labels they read changed.
+  auto touch = [&](uint32_t f) { dirty_faces_.push_back(f); };
   for (uint32_t f : moved) {
     touch(f);
     for (int e = 0; e < 3; ++e) {
