@@ -143,8 +143,7 @@ class BoundaryIteration final : public IterationEngine {
   std::vector<uint32_t> changed_clusters_;   // clusters whose generator the last iteration changed
   std::vector<uint32_t> dirty_faces_;        // faces moved, next to a move, or refused last time
   std::vector<uint32_t> active_;             // faces to test in this iteration
-  std::vector<uint32_t> active_stamp_;       // dedupe mark, compared with stamp_
-  uint32_t stamp_ = 0;
+  std::vector<uint32_t> active_stamp_;       // per face: the iteration that last put it in active_ (dedupe)
   std::vector<uint32_t> destination_;     // per face: proposed cluster or kNone (scratch)
   std::vector<uint8_t> proposal_state_;   // per face: 0 none, 1 proposed, 2 passed the disk tests
   std::vector<std::vector<uint32_t>> worker_moves_;

@@ -249,7 +249,6 @@ void BoundaryIteration::reset(std::vector<uint32_t> labels) {
   for (uint32_t c = 0; c < nc; ++c) changed_clusters_[c] = c;
   dirty_faces_.clear();
   active_stamp_.assign(nf, 0);
-  stamp_ = 0;
   worker_moves_.assign(pool_.size(), {});
   worker_rings_.assign(pool_.size(), {});
   worker_evaluated_.assign(pool_.size(), 0);
@@ -351,10 +350,9 @@ bool BoundaryIteration::is_border(uint32_t f) const {
 // pass that the margin accelerator needs once per reset).
 void BoundaryIteration::collect_active_faces() {
   active_.clear();
-  ++stamp_;
   auto add = [&](uint32_t f) {
-    if (active_stamp_[f] != stamp_) {
-      active_stamp_[f] = stamp_;
+    if (active_stamp_[f] != iteration_) {
+      active_stamp_[f] = iteration_;
       active_.push_back(f);
     }
   };
