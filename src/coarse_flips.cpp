@@ -23,26 +23,19 @@
 #include <vector>
 
 #include "meshcvt/coarsen.h"
+#include "vec3.h"
 
 namespace meshcvt {
 
 namespace {
 
-struct Vec {
-  double x, y, z;
-};
-Vec operator-(Vec a, Vec b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-double dot(Vec a, Vec b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-Vec cross(Vec a, Vec b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-double norm(Vec a) { return std::sqrt(dot(a, a)); }
-
 // Smallest angle of triangle (a, b, c), radians; 0 when degenerate.
-double min_angle(Vec a, Vec b, Vec c) {
-  auto angle = [](Vec p, Vec q, Vec r) {  // at p
-    Vec u = q - p, v = r - p;
-    double nu = norm(u), nv = norm(v);
+double min_angle(Vec3 a, Vec3 b, Vec3 c) {
+  auto angle = [](Vec3 p, Vec3 q, Vec3 r) {  // at p
+    Vec3 u = q - p, v = r - p;
+    double nu = length(u), nv = length(v);
     if (nu == 0 || nv == 0) return 0.0;
-    return std::atan2(norm(cross(u, v)), dot(u, v));
+    return std::atan2(length(cross(u, v)), dot(u, v));
   };
   return std::min({angle(a, b, c), angle(b, c, a), angle(c, a, b)});
 }
@@ -54,9 +47,7 @@ uint64_t edge_key(uint32_t a, uint32_t b) { return a < b ? (uint64_t(a) << 32 | 
 uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg, uint32_t max_passes) {
   const size_t nt = mesh.face_count();
   std::vector<uint32_t>& tri = mesh.indices;
-  auto vertex = [&](uint32_t v) {
-    return Vec{mesh.positions[3 * size_t(v)], mesh.positions[3 * size_t(v) + 1], mesh.positions[3 * size_t(v) + 2]};
-  };
+  auto vertex = [&](uint32_t v) { return mesh_vertex(mesh, v); };
   auto normal = [&](uint32_t a, uint32_t b, uint32_t c) { return cross(vertex(b) - vertex(a), vertex(c) - vertex(a)); };
 
   // Undirected edge -> its triangles (up to two are tracked; more marks the edge unflippable).
@@ -124,10 +115,10 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg, uint32_t max_pas
       if (c == UINT32_MAX || d == UINT32_MAX || c == d) continue;
       if (!may_lose_edge(u) || !may_lose_edge(v)) continue;
       if (edges.count(edge_key(c, d))) continue;
-      Vec n1 = normal(u, v, c), n2 = normal(v, u, d);
-      double l1 = norm(n1), l2 = norm(n2);
+      Vec3 n1 = normal(u, v, c), n2 = normal(v, u, d);
+      double l1 = length(n1), l2 = length(n2);
       if (l1 == 0 || l2 == 0 || dot(n1, n2) < min_cos * l1 * l2) continue;
-      Vec m1 = normal(c, u, d), m2 = normal(d, v, c), side = {n1.x / l1 + n2.x / l2, n1.y / l1 + n2.y / l2,
+      Vec3 m1 = normal(c, u, d), m2 = normal(d, v, c), side = {n1.x / l1 + n2.x / l2, n1.y / l1 + n2.y / l2,
                                                              n1.z / l1 + n2.z / l2};
       if (!(dot(m1, side) > 0) || !(dot(m2, side) > 0)) continue;
       double before = std::min(min_angle(vertex(u), vertex(v), vertex(c)), min_angle(vertex(v), vertex(u), vertex(d)));

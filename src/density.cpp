@@ -32,25 +32,11 @@
 
 #include "meshcvt/error.h"
 #include "parallel.h"
+#include "vec3.h"
 
 namespace meshcvt {
 
 namespace {
-
-struct Vec {
-  double x, y, z;
-};
-inline Vec operator-(Vec a, Vec b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-inline Vec operator+(Vec a, Vec b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-inline Vec operator*(double s, Vec a) { return {s * a.x, s * a.y, s * a.z}; }
-inline double dot(Vec a, Vec b) { return (a.x * b.x + a.y * b.y) + a.z * b.z; }
-inline Vec cross(Vec a, Vec b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-inline double length(Vec a) { return std::sqrt(dot(a, a)); }
-
-inline Vec position(const Mesh& mesh, uint32_t v) {
-  const float* p = &mesh.positions[3 * size_t(v)];
-  return {p[0], p[1], p[2]};
-}
 
 // A face is too thin for a curvature fit when twice its area is below this fraction of its longest
 // edge squared (its smallest angle is then below about 1e-6 rad): the edges no longer span the plane.
@@ -106,46 +92,46 @@ double bounding_diagonal(const Mesh& mesh) {
 
 // Max-weighted unit vertex normal; (0,0,0) where the sum vanishes (no face with area, opposite
 // faces cancelling). Corners with a zero-length edge add nothing.
-Vec vertex_normal(const Mesh& mesh, const Topology& topology, uint32_t v) {
-  Vec sum{0, 0, 0};
-  Vec p = position(mesh, v);
+Vec3 vertex_normal(const Mesh& mesh, const Topology& topology, uint32_t v) {
+  Vec3 sum{0, 0, 0};
+  Vec3 p = mesh_vertex(mesh, v);
   for (uint32_t i = topology.vertex_face_offsets[v]; i < topology.vertex_face_offsets[v + 1]; ++i) {
     const uint32_t* t = &mesh.indices[3 * size_t(topology.vertex_faces[i])];
     int c = t[0] == v ? 0 : t[1] == v ? 1 : 2;
-    Vec e1 = position(mesh, t[(c + 1) % 3]) - p, e2 = position(mesh, t[(c + 2) % 3]) - p;
+    Vec3 e1 = mesh_vertex(mesh, t[(c + 1) % 3]) - p, e2 = mesh_vertex(mesh, t[(c + 2) % 3]) - p;
     double l1 = dot(e1, e1), l2 = dot(e2, e2);
     if (l1 > 0 && l2 > 0) sum = sum + (1.0 / (l1 * l2)) * cross(e1, e2);
   }
   double len = length(sum);
-  return len > 0 && std::isfinite(len) ? (1.0 / len) * sum : Vec{0, 0, 0};
+  return len > 0 && std::isfinite(len) ? (1.0 / len) * sum : Vec3{0, 0, 0};
 }
 
 // sqrt(k1^2 + k2^2) of face f from Rusinkiewicz's fit, or -1 when the face is too thin to fit.
 // Also returns twice the face's area.
 double fitted_curvature(const Mesh& mesh, size_t f, const std::vector<float>& vertex_normals, double& twice_area) {
   const uint32_t* t = &mesh.indices[3 * f];
-  Vec p[3] = {position(mesh, t[0]), position(mesh, t[1]), position(mesh, t[2])};
-  Vec n = cross(p[1] - p[0], p[2] - p[0]);
+  Vec3 p[3] = {mesh_vertex(mesh, t[0]), mesh_vertex(mesh, t[1]), mesh_vertex(mesh, t[2])};
+  Vec3 n = cross(p[1] - p[0], p[2] - p[0]);
   twice_area = length(n);
   if (!std::isfinite(twice_area)) twice_area = 0;
   double longest2 = std::max({dot(p[1] - p[0], p[1] - p[0]), dot(p[2] - p[1], p[2] - p[1]), dot(p[0] - p[2], p[0] - p[2])});
   if (!(twice_area >= kThinFace * longest2) || !(twice_area > 0)) return -1;
   n = (1.0 / twice_area) * n;
-  Vec m[3];
+  Vec3 m[3];
   for (int c = 0; c < 3; ++c) {
     const float* q = &vertex_normals[3 * size_t(t[c])];
     m[c] = {q[0], q[1], q[2]};
     if (dot(m[c], m[c]) == 0) m[c] = n;  // no vertex normal: no bending seen from there
   }
-  Vec u = p[1] - p[0];
+  Vec3 u = p[1] - p[0];
   u = (1.0 / length(u)) * u;
-  Vec v = cross(n, u);
+  Vec3 v = cross(n, u);
   // Normal equations of the 6 x 3 system for II = [[a, b], [b, c]]: per edge e (opposite corner i)
   // with dn the normal change along it, a e_u + b e_v = dn_u and b e_u + c e_v = dn_v.
   double m00 = 0, m01 = 0, m11 = 0, m22 = 0, r0 = 0, r1 = 0, r2 = 0;
   for (int i = 0; i < 3; ++i) {
     int from = (i + 1) % 3, to = (i + 2) % 3;
-    Vec e = p[to] - p[from], dn = m[to] - m[from];
+    Vec3 e = p[to] - p[from], dn = m[to] - m[from];
     double eu = dot(e, u), ev = dot(e, v), du = dot(dn, u), dv = dot(dn, v);
     m00 += eu * eu;
     m01 += eu * ev;
@@ -212,7 +198,7 @@ std::vector<float> curvedness(const Mesh& mesh, const Topology& topology) {
   std::vector<float> vertex_normals(3 * nv);
   run_ranges(split(nv), [&](uint32_t begin, uint32_t end, size_t) {
     for (uint32_t v = begin; v < end; ++v) {
-      Vec n = vertex_normal(mesh, topology, v);
+      Vec3 n = vertex_normal(mesh, topology, v);
       vertex_normals[3 * size_t(v)] = float(n.x);
       vertex_normals[3 * size_t(v) + 1] = float(n.y);
       vertex_normals[3 * size_t(v) + 2] = float(n.z);

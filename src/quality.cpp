@@ -8,26 +8,15 @@
 #include <cmath>
 #include <numbers>
 
+#include "vec3.h"
+
 namespace meshcvt {
 
 namespace {
 
-struct Vec {
-  double x, y, z;
-};
-inline Vec operator-(Vec a, Vec b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-inline double dot(Vec a, Vec b) { return (a.x * b.x + a.y * b.y) + a.z * b.z; }
-inline Vec cross(Vec a, Vec b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-inline double length(Vec a) { return std::sqrt(dot(a, a)); }
-
-inline Vec vertex(const Mesh& mesh, uint32_t v) {
-  const float* p = &mesh.positions[3 * size_t(v)];
-  return {p[0], p[1], p[2]};
-}
-
 // Angle between u and w in degrees; atan2 of |u x w| and u . w is accurate near 0 and 180 degrees,
 // where acos of a normalized dot product is not. 0 when either vector is zero.
-inline double angle_deg(Vec u, Vec w) {
+inline double angle_deg(Vec3 u, Vec3 w) {
   return std::atan2(length(cross(u, w)), dot(u, w)) * (180.0 / std::numbers::pi);
 }
 
@@ -92,8 +81,8 @@ TriangleQuality triangle_quality(const Mesh& mesh) {
   const double q_scale = 6.0 / std::sqrt(3.0);
   double min_angle = 180, max_angle = 0, sum_min_angle = 0, q_min = INFINITY, q_sum = 0, area_sum = 0;
   for (size_t f = 0; f < F; ++f) {
-    Vec p[3];
-    for (int c = 0; c < 3; ++c) p[c] = vertex(mesh, mesh.indices[3 * f + c]);
+    Vec3 p[3];
+    for (int c = 0; c < 3; ++c) p[c] = mesh_vertex(mesh, mesh.indices[3 * f + c]);
     double tri_min = 180;
     for (int c = 0; c < 3; ++c) {
       double a = angle_deg(p[(c + 1) % 3] - p[c], p[(c + 2) % 3] - p[c]);
