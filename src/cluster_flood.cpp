@@ -91,43 +91,29 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
     }
   });
 
-  // Seeds: each cluster's face closest to its generator.
-  std::vector<uint32_t> seed(nc, kNone);
-  std::vector<float> seed_distance(nc, 0.0f);
-  for (uint32_t f = 0; f < nf; ++f) {
-    uint32_t c = out[f];
-    float d = distance(f, c);
-    if (seed[c] == kNone || d < seed_distance[c]) {
-      seed[c] = f;
-      seed_distance[c] = d;
+  // Each cluster's face closest to its generator under `assignment` (kNone for a cluster with no
+  // face; ties to the lower face id).
+  auto closest_faces = [&](const std::vector<uint32_t>& assignment) {
+    std::vector<uint32_t> closest(nc, kNone);
+    std::vector<float> closest_distance(nc, 0.0f);
+    for (uint32_t f = 0; f < nf; ++f) {
+      uint32_t c = assignment[f];
+      float d = distance(f, c);
+      if (closest[c] == kNone || d < closest_distance[c]) {
+        closest[c] = f;
+        closest_distance[c] = d;
+      }
     }
-  }
+    return closest;
+  };
+  std::vector<uint32_t> seed = closest_faces(out);
   // A generator nearest to no face (a badly placed cluster) keeps the face of its old cluster
   // closest to it, so every cluster stays non-empty.
-  bool empty = false;
-  for (uint32_t c = 0; c < nc; ++c) empty |= seed[c] == kNone;
-  if (empty) {
-    std::vector<uint32_t> old_seed(nc, kNone);
-    std::vector<float> old_distance(nc, 0.0f);
-    for (uint32_t f = 0; f < nf; ++f) {
-      uint32_t c = labels[f];
-      float d = distance(f, c);
-      if (old_seed[c] == kNone || d < old_distance[c]) {
-        old_seed[c] = f;
-        old_distance[c] = d;
-      }
-    }
+  if (std::find(seed.begin(), seed.end(), kNone) != seed.end()) {
+    std::vector<uint32_t> old_seed = closest_faces(labels);
     for (uint32_t c = 0; c < nc; ++c)
       if (seed[c] == kNone) out[old_seed[c]] = c;
-    std::fill(seed.begin(), seed.end(), kNone);
-    for (uint32_t f = 0; f < nf; ++f) {
-      uint32_t c = out[f];
-      float d = distance(f, c);
-      if (seed[c] == kNone || d < seed_distance[c]) {
-        seed[c] = f;
-        seed_distance[c] = d;
-      }
-    }
+    seed = closest_faces(out);
     for (uint32_t c = 0; c < nc; ++c)
       if (seed[c] == kNone) return false;  // a forced face was another cluster's only one
   }

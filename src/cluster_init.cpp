@@ -276,6 +276,22 @@ uint64_t splitmix64(uint64_t& state) {
   return z ^ (z >> 31);
 }
 
+// Breadth-first growth from the seeds in `queue` (already labeled): a face joins the cluster that
+// reaches it first. Every face must be reachable (one seed per component at least).
+void grow_from_seeds(const Topology& topology, std::vector<uint32_t>& labels, std::vector<uint32_t>& queue) {
+  for (size_t head = 0; head < queue.size(); ++head) {
+    uint32_t f = queue[head];
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
+      if (o != kNone && labels[o] == kNone) {
+        labels[o] = labels[f];
+        queue.push_back(o);
+      }
+    }
+  }
+  assert(queue.size() == labels.size());
+}
+
 std::vector<uint32_t> random_clustering(const ClusterProblem& problem, const Topology& topology, uint32_t clusters,
                                         uint64_t seed) {
   const uint32_t nf = problem.face_count;
@@ -306,18 +322,7 @@ std::vector<uint32_t> random_clustering(const ClusterProblem& problem, const Top
     labels[free_faces[i]] = next++;
     queue.push_back(free_faces[i]);
   }
-  // Breadth-first growth: a face joins the cluster that reaches it first.
-  for (size_t head = 0; head < queue.size(); ++head) {
-    uint32_t f = queue[head];
-    for (int e = 0; e < 3; ++e) {
-      uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
-      if (o != kNone && labels[o] == kNone) {
-        labels[o] = labels[f];
-        queue.push_back(o);
-      }
-    }
-  }
-  assert(queue.size() == nf);
+  grow_from_seeds(topology, labels, queue);
   return labels;
 }
 
@@ -378,17 +383,7 @@ std::vector<uint32_t> per_component_clustering(const ClusterProblem& problem, co
       queue.push_back(free_faces[i]);
     }
   }
-  for (size_t head = 0; head < queue.size(); ++head) {
-    uint32_t f = queue[head];
-    for (int e = 0; e < 3; ++e) {
-      uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
-      if (o != kNone && labels[o] == kNone) {
-        labels[o] = labels[f];
-        queue.push_back(o);
-      }
-    }
-  }
-  assert(queue.size() == nf);
+  grow_from_seeds(topology, labels, queue);
   return labels;
 }
 

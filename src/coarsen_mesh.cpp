@@ -569,9 +569,7 @@ class ClusterCutter {
   // face it is reached from first, breadth-first. A ring around a handle comes out as k pieces
   // across it, each from one boundary of the ring to the other.
   std::vector<uint8_t> loop_sectors(const std::vector<uint32_t>& loop, uint32_t k, uint32_t shift) {
-    const uint32_t count = uint32_t(members_.size());
-    constexpr uint32_t kUnclaimed = kNone - 1;
-    for (uint32_t i = 0; i < count; ++i) grow_mark_[members_[i]] = kUnclaimed;
+    for (uint32_t m : members_) grow_mark_[m] = kUnclaimed;
     queue_.clear();
     const size_t length = loop.size();
     const size_t offset = length * shift / (6 * k);
@@ -581,38 +579,32 @@ class ClusterCutter {
       grow_mark_[f] = uint32_t(j * k / length);
       queue_.push_back(f);
     }
-    for (size_t head = 0; head < queue_.size(); ++head)
-      for (int e = 0; e < 3; ++e) {
-        uint32_t o = topology_.face_adjacent[3 * size_t(queue_[head]) + e];
-        if (o != kNone && grow_mark_[o] == kUnclaimed) grow_mark_[o] = grow_mark_[queue_[head]], queue_.push_back(o);
-      }
-    std::vector<uint8_t> side(count);
-    for (uint32_t i = 0; i < count; ++i) {
-      uint32_t m = grow_mark_[members_[i]];
-      side[i] = m == kUnclaimed ? 0 : uint8_t(m);
-      grow_mark_[members_[i]] = kNone;
-    }
-    return side;
+    return spread_marks();
   }
 
   // Pieces grown breadth-first inside the cluster from the seeds (piece = seed's position); faces
   // not reached (a cluster in pieces) go to piece 0.
   std::vector<uint8_t> grow(const std::vector<uint32_t>& seeds) {
-    const uint32_t count = uint32_t(members_.size());
-    constexpr uint32_t kUnclaimed = kNone - 1;
-    for (uint32_t i = 0; i < count; ++i) grow_mark_[members_[i]] = kUnclaimed;
+    for (uint32_t m : members_) grow_mark_[m] = kUnclaimed;
     queue_.clear();
     for (uint32_t s = 0; s < seeds.size(); ++s) {
       grow_mark_[members_[seeds[s]]] = s;
       queue_.push_back(members_[seeds[s]]);
     }
+    return spread_marks();
+  }
+
+  // The faces in queue_ (marked with their piece) spread their marks breadth-first over the
+  // cluster's unclaimed faces; returns each member's piece (0 when not reached) and clears the marks.
+  static constexpr uint32_t kUnclaimed = kNone - 1;
+  std::vector<uint8_t> spread_marks() {
     for (size_t head = 0; head < queue_.size(); ++head)
       for (int e = 0; e < 3; ++e) {
         uint32_t o = topology_.face_adjacent[3 * size_t(queue_[head]) + e];
         if (o != kNone && grow_mark_[o] == kUnclaimed) grow_mark_[o] = grow_mark_[queue_[head]], queue_.push_back(o);
       }
-    std::vector<uint8_t> side(count);
-    for (uint32_t i = 0; i < count; ++i) {
+    std::vector<uint8_t> side(members_.size());
+    for (size_t i = 0; i < members_.size(); ++i) {
       uint32_t m = grow_mark_[members_[i]];
       side[i] = m == kUnclaimed ? 0 : uint8_t(m);
       grow_mark_[members_[i]] = kNone;
