@@ -128,6 +128,7 @@ class BoundaryIteration final : public IterationEngine {
   void evaluate_range(size_t begin, size_t end, unsigned worker);
   void collect_active_faces();
   bool is_border(uint32_t face) const;
+  bool ring_moved_last_iteration(uint32_t face) const;
 
   const ClusterProblem& problem_;
   const Mesh& mesh_;
@@ -145,7 +146,11 @@ class BoundaryIteration final : public IterationEngine {
   std::vector<uint32_t> active_;             // faces to test in this iteration
   std::vector<uint32_t> active_stamp_;       // per face: the iteration that last put it in active_ (dedupe)
   std::vector<uint32_t> destination_;     // per face: proposed cluster or kNone (scratch)
-  std::vector<uint8_t> proposal_state_;   // per face: 0 none, 1 proposed, 2 passed the disk tests
+  std::vector<uint8_t> proposal_state_;   // per face: a ProposalState (cluster_iterate.cpp)
+  // Disk-test refusals are remembered for one iteration: a face proposing the same destination
+  // again, with no face around its vertices moved since, is refused without gathering its ring.
+  std::vector<uint32_t> disk_refused_;    // faces the disk tests refused last iteration
+  std::vector<uint32_t> vertex_moved_at_;  // per vertex: the last iteration that moved a face around it
   std::vector<std::vector<uint32_t>> worker_moves_;
   std::vector<std::vector<uint32_t>> worker_rings_;  // vertex rings of proposals: size, then faces
   std::vector<uint64_t> worker_evaluated_;

@@ -50,7 +50,15 @@ namespace meshcvt {
 
 namespace {
 
-enum ProposalState : uint8_t { kNoProposal = 0, kProposed = 1, kPassedDiskTests = 2 };
+// kRefusedByDisk: refused by (a) or (b) in the last iteration, destination_ still set.
+// kProposedAgain: proposed again for that same destination (its disk tests may be reused).
+enum ProposalState : uint8_t {
+  kNoProposal = 0,
+  kProposed = 1,
+  kPassedDiskTests = 2,
+  kRefusedByDisk = 3,
+  kProposedAgain = 4
+};
 
 // Faces sharing a vertex with `face` (itself excluded), sorted, without repeats. The three vertex
 // lists are sorted already (Topology's CSR), so a merge is enough.
@@ -243,6 +251,8 @@ void BoundaryIteration::reset(std::vector<uint32_t> labels) {
   for (uint32_t c = 0; c < nc; ++c) compute_generator(problem_, &sums_[size_t(c) * kSumComponents], &generators_[3 * c]);
   destination_.assign(nf, kNone);
   proposal_state_.assign(nf, kNoProposal);
+  disk_refused_.clear();
+  vertex_moved_at_.assign(mode_ == TopologyMode::preserving ? mesh_.vertex_count() : 0, 0);
   // Every cluster counts as changed: the first iteration tests every border face.
   cluster_changed_.assign(nc, 1);
   changed_clusters_.resize(nc);
@@ -434,8 +444,8 @@ void BoundaryIteration::evaluate_range(size_t begin, size_t end, unsigned worker
     }
     if (accelerate_) eval_stamp_[f] = iteration_;
     if (best != kNone) {
+      proposal_state_[f] = proposal_state_[f] == kRefusedByDisk && destination_[f] == best ? kProposedAgain : kProposed;
       destination_[f] = best;
-      proposal_state_[f] = kProposed;
       moves.push_back(f);
     } else if (accelerate_) {
       // Rounded down to float, so the watch never fires late.
@@ -453,6 +463,13 @@ bool move_keeps_disks(const Mesh& mesh, const Topology& topology, const std::vec
   std::vector<uint32_t> ring;
   gather_vertex_ring(mesh, topology, face, ring);
   return ring_keeps_disks(topology, labels, ring, face, destination);
+}
+
+// A face of the vertex ring of `face` moved in the last iteration (its disk tests may differ now).
+bool BoundaryIteration::ring_moved_last_iteration(uint32_t face) const {
+  const uint32_t* v = &mesh_.indices[3 * size_t(face)];
+  const uint32_t last = iteration_ - 1;
+  return vertex_moved_at_[v[0]] == last || vertex_moved_at_[v[1]] == last || vertex_moved_at_[v[2]] == last;
 }
 
 IterationRecord BoundaryIteration::step() {
@@ -473,6 +490,12 @@ IterationRecord BoundaryIteration::step() {
       watch_count_[f] = 0;
     }
   for (uint64_t n : worker_evaluated_) record.evaluated_faces += n;
+  for (uint32_t f : disk_refused_)  // refused last time, not proposed again: forget it
+    if (proposal_state_[f] == kRefusedByDisk) {
+      proposal_state_[f] = kNoProposal;
+      destination_[f] = kNone;
+    }
+  disk_refused_.clear();
 
   // 2. disk filter
   std::vector<uint8_t> accepted(proposals.size(), 1);
@@ -485,6 +508,7 @@ IterationRecord BoundaryIteration::step() {
       std::vector<uint32_t>& store = worker_rings_[w];
       for (size_t i = b; i < e; ++i) {
         uint32_t f = proposals[i];
+        if (proposal_state_[f] == kProposedAgain && !ring_moved_last_iteration(f)) continue;  // refused as before
         gather_vertex_ring(mesh_, topology_, f, ring);
         ring_worker[i] = w;
         ring_begin[i] = uint32_t(store.size());
@@ -533,12 +557,19 @@ IterationRecord BoundaryIteration::step() {
   for (size_t i = 0; i < proposals.size(); ++i) {
     uint32_t f = proposals[i];
     uint32_t to = destination_[f];
-    destination_[f] = kNone;
-    proposal_state_[f] = kNoProposal;
     if (!accepted[i]) {
       dirty_faces_.push_back(f);  // refused: the rule still wants it to move, so test it again
+      if (mode_ == TopologyMode::preserving && proposal_state_[f] != kPassedDiskTests) {
+        proposal_state_[f] = kRefusedByDisk;  // keeps destination_ for the next iteration
+        disk_refused_.push_back(f);
+      } else {
+        proposal_state_[f] = kNoProposal;
+        destination_[f] = kNone;
+      }
       continue;
     }
+    destination_[f] = kNone;
+    proposal_state_[f] = kNoProposal;
     uint32_t from = labels_[f];
     moved.push_back(f);
     problem_.face_fixed(f, v);
@@ -551,6 +582,8 @@ IterationRecord BoundaryIteration::step() {
     mark_changed(from);
     mark_changed(to);
     labels_[f] = to;
+    if (mode_ == TopologyMode::preserving)
+      for (int j = 0; j < 3; ++j) vertex_moved_at_[mesh_.indices[3 * size_t(f) + j]] = iteration_;
   }
   record.moves = moved.size();
 
