@@ -74,7 +74,7 @@ struct ClusterGraph {
   std::vector<uint8_t> open;
 };
 void build_cluster_graph(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t clusters,
-                         ClusterGraph& graph);
+                         ClusterGraph& graph, WorkerPool* pool = nullptr);
 
 /// Clusters enclosed by exactly one other cluster that itself has other neighbours ("isolated"). A
 /// cluster that reaches a boundary (or non-manifold) edge is not enclosed: the end of a strip

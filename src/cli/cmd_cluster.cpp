@@ -16,7 +16,7 @@ namespace {
 
 struct ClusterArgs {
   std::string input, output, labels, report, metric = "cvt", init = "hierarchical", topology = "preserving", device;
-  uint32_t clusters = 0, max_iter = 1000, lloyd_steps = 16;
+  uint32_t clusters = 0, max_iter = 1000, lloyd_steps = 64;
   unsigned threads = 0;
   uint64_t seed = 1;
   bool quiet = false, no_weld = false, no_accelerate = false;
@@ -117,7 +117,7 @@ const RegisterCommand reg(20, [](CLI::App& app) {
   sub->add_option("--max-iter", a->max_iter, "maximum iterations per round (default 1000)");
   sub->add_option("--threads", a->threads, "worker threads, 0 = all cores (the result does not depend on it)");
   sub->add_option("--seed", a->seed, "seed for --init random");
-  sub->add_option("--lloyd-steps", a->lloyd_steps, "at most this many Lloyd steps after initialization (default 16, 0 = none)");
+  sub->add_option("--lloyd-steps", a->lloyd_steps, "at most this many Lloyd steps after initialization (default 64, 0 = none)");
   sub->add_flag("--no-accelerate", a->no_accelerate, "test every border face every iteration (same result, slower)");
   sub->add_flag("--no-weld", a->no_weld, "do not merge vertices with identical positions");
   sub->add_option("--labels", a->labels, "also write one cluster id per line, in the input's face order");

@@ -55,10 +55,11 @@ struct ClusterOptions {
   bool accelerate = true;          ///< Section 5.2: skip settled cluster edges (exact: same result)
   /// After initialization (not with initial_labels): at most this many Lloyd steps, each moving every
   /// border to the bisector of the current generators at once (a constrained flood, see
-  /// cluster_flood.cpp), kept only while they lower the energy and stopped once one gains < 0.5%.
-  /// They do the long-range work that would take boundary testing one face layer per iteration;
-  /// 0 leaves the initialization as the paper has it.
-  uint32_t lloyd_steps = 16;
+  /// cluster_flood.cpp, with momentum), kept only while they lower the energy and stopped once one
+  /// gains < 0.2% (less with over 100 faces per cluster). They do the long-range work that would
+  /// take boundary testing one face layer per iteration; 0 leaves the initialization as the paper
+  /// has it.
+  uint32_t lloyd_steps = 64;
   unsigned threads = 0;            ///< 0: every core. The result does not depend on it.
   uint64_t seed = 1;               ///< for Init::random
   /// "auto", "cpu", "gpu" or "gpu:N". Empty: $MESHCVT_DEVICE, else "auto".
