@@ -11,6 +11,7 @@
 #include "meshcvt/approximate.h"
 #include "meshcvt/error.h"
 #include "meshcvt/io.h"
+#include "meshcvt/mesh_order.h"
 #include "meshcvt/topology.h"
 
 namespace meshcvt::cli {
@@ -133,7 +134,10 @@ void run_approximate(ApproximateArgs& a) {
   ro.weld = !a.no_weld;
   ReadStats rs;
   Mesh mesh = read_mesh(a.input, ro, &rs);
-  double read_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  // Large meshes are partitioned in an order with locality (mesh_order.h); --partition is
+  // written in the input's.
+  const LocalityOrder order = reorder_for_locality(mesh);
+  double read_s = std::chrono::duration<double>(Clock::now() - t0).count();  // reading and reordering
   Topology topology = build_topology(mesh);
   ShapeApproximation s = approximate_shape(mesh, topology, options);
   if (progress) std::fprintf(stderr, "\r%60s\r", "");
@@ -146,9 +150,12 @@ void run_approximate(ApproximateArgs& a) {
   write_mesh(a.output, s.mesh, wo);
   if (!a.polygons.empty()) write_polygon_mesh(a.polygons, s.mesh.positions, s.polygon_offsets, s.polygon_vertices);
   if (!a.partition.empty()) {
+    Mesh input = mesh;
+    restore_input_order(input, order);
+    const std::vector<uint32_t> labels = to_input_order(s.labels, order);
     WriteOptions po;
-    po.face_labels = &s.labels;
-    write_mesh(a.partition, mesh, po);
+    po.face_labels = &labels;
+    write_mesh(a.partition, input, po);
   }
   double write_s = std::chrono::duration<double>(Clock::now() - t0).count();
   if (!a.report.empty()) write_report(a, mesh, rs, s, read_s, write_s);

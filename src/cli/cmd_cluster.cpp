@@ -8,6 +8,7 @@
 #include "meshcvt/cluster.h"
 #include "meshcvt/error.h"
 #include "meshcvt/io.h"
+#include "meshcvt/mesh_order.h"
 #include "meshcvt/topology.h"
 
 namespace meshcvt::cli {
@@ -81,9 +82,16 @@ void run_cluster(const ClusterArgs& a) {
   ro.weld = !a.no_weld;
   ReadStats rs;
   Mesh mesh = read_mesh(a.input, ro, &rs);
-  double read_s = std::chrono::duration<double>(Clock::now() - t0).count();
-  Topology topology = build_topology(mesh);
-  Clustering c = cluster(mesh, topology, options);
+  // Large meshes are clustered in an order with locality (mesh_order.h); outputs use the input's.
+  const LocalityOrder order = reorder_for_locality(mesh);
+  double read_s = std::chrono::duration<double>(Clock::now() - t0).count();  // reading and reordering
+  Clustering c;
+  {
+    Topology topology = build_topology(mesh);
+    c = cluster(mesh, topology, options);
+  }
+  restore_input_order(mesh, order);
+  c.labels = to_input_order(c.labels, order);
   if (progress) std::fprintf(stderr, "\r%60s\r", "");
   if (!c.device_notice.empty() && !a.quiet) std::fprintf(stderr, "meshcvt: note: %s\n", c.device_notice.c_str());
 

@@ -14,6 +14,7 @@
 #include "meshcvt/density.h"
 #include "meshcvt/error.h"
 #include "meshcvt/io.h"
+#include "meshcvt/mesh_order.h"
 #include "meshcvt/quality.h"
 #include "meshcvt/subdivide.h"
 #include "meshcvt/topology.h"
@@ -118,7 +119,10 @@ void run_coarsen(const CoarsenArgs& a) {
       density = std::move(fine);
     }
   }
-  options.density = std::move(density);  // coarsen_mesh weighs both the clusters and the dual with it
+  // Large meshes are clustered in an order with locality (mesh_order.h); the output does not
+  // depend on the input's face order other than through it.
+  const LocalityOrder order = reorder_for_locality(mesh);
+  options.density = to_reordered(density, order);  // coarsen_mesh weighs both the clusters and the dual with it
   const double prepare_s = seconds(t0);
   // The library's message names the numbers; the command line also knows the remedy.
   if (a.clusters > mesh.face_count() && subdivision_levels == 0)
