@@ -144,7 +144,7 @@ class BoundaryIteration final : public IterationEngine {
   std::vector<uint32_t> changed_clusters_;   // clusters whose generator the last iteration changed
   std::vector<uint32_t> dirty_faces_;        // faces moved, next to a move, or refused last time
   std::vector<uint32_t> active_;             // faces to test in this iteration
-  std::vector<uint32_t> active_stamp_;       // per face: the iteration that last put it in active_ (dedupe)
+  std::vector<uint64_t> active_bits_;        // one bit per face: marked for active_ (cleared once listed)
   std::vector<uint32_t> destination_;     // per face: proposed cluster or kNone (scratch)
   std::vector<uint8_t> proposal_state_;   // per face: a ProposalState (cluster_iterate.cpp)
   // Disk-test refusals are remembered for one iteration: a face proposing the same destination
