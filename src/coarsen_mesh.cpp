@@ -8,7 +8,11 @@
 // border, every cluster with three neighbours or more (with two, the triangle of its two corners
 // comes out twice). Then clusters, borders and corners are the faces, edges and vertices of a map
 // on the surface, V - E + F is the surface's chi, and the dual (corners -> polygons) has the same
-// chi. find_dual_defects names the clusters that break this.
+// chi. find_dual_defects names the clusters that break this. One more condition lives at the
+// corners where four or more clusters meet: coarsen_clustering triangulates their polygon, and
+// where every diagonal it could take is already an edge of the dual (or another corner's only
+// diagonal), that edge gets three or more triangles (nonmanifold_output) although every cluster is
+// fit. Merges check it (CornerPolygons); cuts of a cluster cannot see it.
 //
 // Fixes, in rounds (fix_round):
 //  - a double border roughened by the iteration (a face of a third cluster poking between the two)
@@ -22,15 +26,21 @@
 //    along the boundary, one border with each neighbour, enough neighbours).
 // The rounds run on the labels without iterating in between: measured on the elephant, iterating
 // after every round undoes the fixes (the energy prefers rings around thin limbs) and never
-// settles, while fix-only rounds converge. Once valid, the iteration smooths the fixed clusters
+// settles, while fix-only rounds converge. Rounds that come back to labels they had before stop
+// (they would repeat the cycle: a cut undone by a later merge, as on the elephant at n = 20 when
+// merges did not check the corners). Once valid, the iteration smooths the fixed clusters
 // (FixLoop): fully, or if that brings defects back that the rounds cannot remove, in steps that
 // each keep the clustering valid.
 //
 // When the rounds cannot clean a component (a ring around a handle whose two sides touch the same
 // cluster; a small component with no cluster to spare), a valid clustering at 2n, 4n, ... clusters,
 // where the parts are resolved, is merged back to n (merge_down) with merges that keep the dual
-// valid (the link condition of an edge contraction), and replaces that component. Last, a small
-// component may start from one cluster per face (valid on a manifold) merged down the same way.
+// valid (the link condition of an edge contraction, and corner polygons that stay triangulable),
+// and replaces that component. Close to the fewest vertices a surface allows, greedy merging stops
+// above n at an irreducible triangulation (every merge would pinch the surface); edge flips
+// (flip_then_merge: a strip of faces along a border handed to a cluster at its end) then open a
+// merge again. Last, a small component may start from one cluster per face (valid on a manifold)
+// merged down the same way.
 // Every stage keeps the labels with the fewest defects, so the job always ends; what cannot be
 // fixed is reported (CoarsenMeshResult::defects_remain).
 //
@@ -49,7 +59,9 @@
 #include <numbers>
 #include <optional>
 #include <queue>
+#include <span>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -394,6 +406,159 @@ class RegionCheck {
   std::vector<std::pair<uint32_t, uint32_t>> ends_;  // (neighbour id, vertex) per end of a border edge
 };
 
+// The corners where four or more clusters meet, as the dual sees them: the clusters around the
+// vertex in fan order are a polygon, which coarsen_clustering triangulates avoiding diagonals that
+// are edges of the dual already (two clusters sharing a border or a boundary step) or diagonals
+// another polygon took; where every triangulation has such a diagonal, that edge gets three or
+// more triangles (nonmanifold_output). RegionCheck cannot see it: a corner of four is fine for
+// each of its clusters, and only the dual's edges elsewhere decide which diagonals are free. So a
+// merge, which turns the polygons around the merged cluster into smaller ones with new neighbours,
+// checks them here. (A merge never adds a cluster to a corner: merging into a clustering whose
+// corners are all triangles can only make more triangles.)
+class CornerPolygons {
+ public:
+  // Polygons larger than this (a vertex of very high valence) are not checked.
+  static constexpr size_t kMaxPolygon = 16;
+
+  CornerPolygons(const Mesh& mesh, const Topology& topology)
+      : mesh_(mesh), topology_(topology), vertex_stamp_(mesh.vertex_count(), 0) {}
+
+  // The polygon at vertex v with label(f) the cluster of face f: true, and polygon() its clusters
+  // in fan order (an open fan from one boundary edge to the other), when 4 to kMaxPolygon clusters
+  // meet at v in one manifold fan, each once. False elsewhere: inside a cluster, a corner of
+  // three (a triangle, nothing to choose), or a cluster twice around v (pinched: RegionCheck's).
+  template <class Label>
+  bool at(uint32_t v, Label label) {
+    const uint32_t begin = topology_.vertex_face_offsets[v], end = topology_.vertex_face_offsets[v + 1];
+    if (end - begin < 4) return false;
+    const uint32_t first = topology_.vertex_faces[begin];
+    uint32_t distinct = 0, seen[3];
+    for (uint32_t i = begin; i < end && distinct < 3; ++i) {
+      uint32_t l = label(topology_.vertex_faces[i]);
+      if (std::find(seen, seen + distinct, l) == seen + distinct) seen[distinct++] = l;
+    }
+    if (distinct < 3) return false;
+    // The face across the edge {v, x} of face g, kNone on the boundary.
+    auto across = [&](uint32_t g, uint32_t x) {
+      const uint32_t* t = &mesh_.indices[3 * size_t(g)];
+      for (int e = 0; e < 3; ++e)
+        if ((t[e] == v && t[(e + 1) % 3] == x) || (t[e] == x && t[(e + 1) % 3] == v))
+          return topology_.face_adjacent[3 * size_t(g) + e];
+      return kNone;
+    };
+    auto third = [&](uint32_t g, uint32_t x) {
+      const uint32_t* t = &mesh_.indices[3 * size_t(g)];
+      return t[0] != v && t[0] != x ? t[0] : t[1] != v && t[1] != x ? t[1] : t[2];
+    };
+    // From `first` one way round to the start of an open fan (or back to `first`), then the other
+    // way round collecting the fan.
+    const uint32_t* t = &mesh_.indices[3 * size_t(first)];
+    const int cv = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+    uint32_t start = first, exit = t[(cv + 1) % 3];
+    bool closed = false;
+    for (uint32_t steps = 0; steps < end - begin; ++steps) {
+      uint32_t h = across(start, exit);
+      if (h == first) {
+        closed = true;
+        break;
+      }
+      if (h == kNone) break;
+      exit = third(h, exit);
+      start = h;
+    }
+    exit = closed ? t[(cv + 2) % 3] : third(start, exit);
+    if (closed) start = first;
+    fan_.assign(1, start);
+    for (uint32_t g = start, steps = 0; steps < end - begin; ++steps) {
+      uint32_t h = across(g, exit);
+      if (h == kNone || h == start) break;
+      fan_.push_back(h);
+      exit = third(h, exit);
+      g = h;
+    }
+    if (fan_.size() != end - begin) return false;  // not one manifold fan
+    runs_.clear();
+    for (uint32_t h : fan_)
+      if (runs_.empty() || runs_.back() != label(h)) runs_.push_back(label(h));
+    if (closed && runs_.size() > 1 && runs_.front() == runs_.back()) runs_.pop_back();
+    if (runs_.size() < 4 || runs_.size() > kMaxPolygon) return false;
+    sorted_ = runs_;
+    std::sort(sorted_.begin(), sorted_.end());
+    return std::adjacent_find(sorted_.begin(), sorted_.end()) == sorted_.end();
+  }
+  const std::vector<uint32_t>& polygon() const { return runs_; }
+
+  // Whether `polygon` (as at() gives it) has a triangulation none of whose diagonals (x, y) is
+  // taken(x, y). Interval dynamic programming: can[i][j], the part i..j closed by the chord (i, j)
+  // splits into triangles with free diagonals. O(k^3) for k clusters.
+  template <class Taken>
+  bool triangulable(const uint32_t* polygon, size_t k, Taken taken) {
+    can_.assign(k * k, 0);
+    for (size_t i = 0; i + 1 < k; ++i) can_[i * k + i + 1] = 1;
+    for (size_t length = 2; length < k; ++length)
+      for (size_t i = 0; i + length < k; ++i) {
+        const size_t j = i + length;
+        for (size_t m = i + 1; m < j && !can_[i * k + j]; ++m)
+          can_[i * k + j] = can_[i * k + m] && can_[m * k + j] && (m - i < 2 || !taken(polygon[i], polygon[m])) &&
+                            (j - m < 2 || !taken(polygon[m], polygon[j]));
+      }
+    return can_[k - 1] != 0;
+  }
+
+  // Whether every polygon at a vertex of `faces` is triangulable (clusters by label, diagonals
+  // refused by taken).
+  template <class Label, class Taken>
+  bool all_triangulable(const std::vector<uint32_t>& faces, Label label, Taken taken) {
+    for (uint32_t v : vertices_of(faces))
+      if (at(v, label) && !triangulable(runs_.data(), runs_.size(), taken)) return false;
+    return true;
+  }
+
+  // The distinct vertices of `faces` (scratch: valid until the next call).
+  const std::vector<uint32_t>& vertices_of(const std::vector<uint32_t>& faces) {
+    if (++stamp_ == 0) {  // wrapped: clear once
+      std::fill(vertex_stamp_.begin(), vertex_stamp_.end(), 0);
+      stamp_ = 1;
+    }
+    vertices_.clear();
+    for (uint32_t f : faces)
+      for (int k = 0; k < 3; ++k) {
+        uint32_t v = mesh_.indices[3 * size_t(f) + k];
+        if (vertex_stamp_[v] != stamp_) vertex_stamp_[v] = stamp_, vertices_.push_back(v);
+      }
+    return vertices_;
+  }
+
+ private:
+  const Mesh& mesh_;
+  const Topology& topology_;
+  std::vector<uint32_t> vertex_stamp_, vertices_, fan_, runs_, sorted_;
+  uint32_t stamp_ = 0;
+  std::vector<uint8_t> can_;
+};
+
+// How many corner polygons have each pair of clusters as a possible diagonal (the two not
+// consecutive around the corner). coarsen_clustering triangulates the polygons one after the
+// other, each taking its best free diagonals, so a polygon can count only on a diagonal that no
+// other polygon may take: two corners facing the same pair across them (both of whose other
+// diagonals are edges) would both take it. Polygons are added and removed as flat lists.
+class DiagonalLedger {
+ public:
+  void add(const uint32_t* polygon, size_t k, int sign) {
+    for (size_t i = 0; i < k; ++i)
+      for (size_t j = i + 2; j < k; ++j)
+        if (i > 0 || j + 1 < k) count_[key(polygon[i], polygon[j])] += uint32_t(sign);
+  }
+  uint32_t count(uint32_t x, uint32_t y) const {
+    auto it = count_.find(key(x, y));
+    return it == count_.end() ? 0 : it->second;
+  }
+
+ private:
+  static uint64_t key(uint32_t x, uint32_t y) { return x < y ? uint64_t(x) << 32 | y : uint64_t(y) << 32 | x; }
+  std::unordered_map<uint64_t, uint32_t> count_;  // lookups only: the order of the map never matters
+};
+
 // Ways to cut one cluster into 2 or 3 pieces, scored by RegionCheck.
 //  - 2 pieces: the planes through the mass centroid normal to each principal axis (largest spread
 //    first); halves grown breadth-first from two far-apart faces (of the whole cluster, of its faces
@@ -659,7 +824,8 @@ bool uses(const DualDefect& d, uint32_t c) { return d.cluster == c || d.other ==
 // (RegionCheck) and, preferably, away from every defect and from the round's other changes.
 class MergeFinder {
  public:
-  MergeFinder(const ClusterView& view, RegionCheck& check) : view_(view), check_(check) {
+  MergeFinder(const ClusterView& view, RegionCheck& check, CornerPolygons& corners)
+      : view_(view), check_(check), corners_(corners) {
     const uint32_t n = view.clusters;
     for (uint32_t a = 0; a < n; ++a)
       for (uint32_t i = view.neighbour_offsets[a]; i < view.neighbour_offsets[a + 1]; ++i) {
@@ -723,11 +889,27 @@ class MergeFinder {
     for (uint32_t c : {p.a, p.b})
       faces_.insert(faces_.end(), view_.members.begin() + view_.offsets[c], view_.members.begin() + view_.offsets[c + 1]);
     side_.assign(faces_.size(), 0);
-    return check_.score(faces_, side_, 1, labels) < 10;
+    if (!(check_.score(faces_, side_, 1, labels) < 10)) return false;
+    // The corners around the merged cluster (b now a) against the round's starting neighbours;
+    // the round's other changes are kept away from it (`nearby`), and the next round's defect
+    // search sees everything anyway.
+    return corners_.all_triangulable(
+        faces_, [&](uint32_t f) { return labels[f] == p.b ? p.a : labels[f]; },
+        [&](uint32_t x, uint32_t y) {
+          if (y == p.a) std::swap(x, y);
+          if (x == p.a) return adjacent(p.a, y) || adjacent(p.b, y);
+          return adjacent(x, y);
+        });
+  }
+
+  bool adjacent(uint32_t x, uint32_t y) const {
+    auto begin = view_.neighbours.begin() + view_.neighbour_offsets[x];
+    return std::binary_search(begin, view_.neighbours.begin() + view_.neighbour_offsets[x + 1], y);
   }
 
   const ClusterView& view_;
   RegionCheck& check_;
+  CornerPolygons& corners_;
   std::vector<Pair> pairs_;
   std::vector<uint8_t> taken_;
   std::vector<uint32_t> common_, faces_;
@@ -740,7 +922,7 @@ class MergeFinder {
 // lists stay exact for the others). Returns the fixes.
 std::vector<CoarsenFix> fix_round(const Topology& topology, const ClusterView& view,
                                   const std::vector<DualDefect>& defects, uint32_t round, ClusterCutter& cutter,
-                                  RegionCheck& check, std::vector<uint32_t>& labels) {
+                                  RegionCheck& check, CornerPolygons& corners, std::vector<uint32_t>& labels) {
   const uint32_t n = view.clusters;
   std::vector<uint8_t> involved(n, 0), blocked(n, 0), nearby(n, 0);
   for (const DualDefect& d : defects)
@@ -827,7 +1009,7 @@ std::vector<CoarsenFix> fix_round(const Topology& topology, const ClusterView& v
   }
 
   if (cuts.empty()) return fixes;
-  MergeFinder merges(view, check);
+  MergeFinder merges(view, check, corners);
   for (const Cut& cut : cuts) {
     ClusterCutter::Plan plan =
         cutter.plan(view, labels, cut.target, cut.partner, cut.defect.kind == DualDefect::boundary_arcs);
@@ -905,15 +1087,18 @@ void replace_component(const Topology& topology, std::vector<uint32_t>& base, co
 
 // Merges adjacent clusters of a valid clustering, cheapest energy first, until every component
 // holds its target count, taking only merges that keep the dual valid: the merged cluster is fit
-// (RegionCheck: a disk, one border with each neighbour, enough neighbours) and the clusters next to
-// both keep three neighbours or more. In the dual that is an edge contraction meeting the link
+// (RegionCheck: a disk, one border with each neighbour, enough neighbours), the clusters next to
+// both keep three neighbours or more, and every corner polygon around the merged cluster keeps a
+// triangulation whose diagonals are neither edges nor possible diagonals of another corner
+// (CornerPolygons, DiagonalLedger). In the dual that is an edge contraction meeting the link
 // condition, so the dual stays a manifold of the same topology. Returns the merges made; the
 // targets are met when it equals clusters - sum(targets). Labels come out renumbered to
 // [0, sum(targets)) in the order of their old ids. by_weight: lightest pair first instead (even
 // sizes; a second chance when the energy order runs into a dead end, where every merge left would
 // leave some cluster with two neighbours).
-uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck& check, std::vector<uint32_t>& labels,
-                    uint32_t clusters, const std::vector<uint32_t>& targets, bool by_weight = false) {
+uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck& check, CornerPolygons& corners,
+                    std::vector<uint32_t>& labels, uint32_t clusters, const std::vector<uint32_t>& targets,
+                    bool by_weight = false) {
   ClusterView view = view_of(topology, data, labels, clusters);
   std::vector<std::vector<uint32_t>> members(clusters), neighbours(clusters);
   std::vector<double> weight = view.weight, sum(3 * size_t(clusters));
@@ -950,6 +1135,11 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
       if (a < b) push(a, b);
   std::vector<uint32_t> common, faces;
   std::vector<uint8_t> side;
+  DiagonalLedger ledger;
+  auto current = [&](uint32_t f) { return labels[f]; };
+  for (uint32_t v = 0; v + 1 < topology.vertex_face_offsets.size(); ++v)
+    if (corners.at(v, current)) ledger.add(corners.polygon().data(), corners.polygon().size(), +1);
+  std::vector<uint32_t> old_polygons, new_polygons, old_offsets, new_offsets;
   auto fit = [&](uint32_t a, uint32_t b) {
     common.clear();
     std::set_intersection(neighbours[a].begin(), neighbours[a].end(), neighbours[b].begin(), neighbours[b].end(),
@@ -959,7 +1149,47 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
     faces = members[a];
     faces.insert(faces.end(), members[b].begin(), members[b].end());
     side.assign(faces.size(), 0);
-    return check.score(faces, side, 1, labels) < 10;
+    if (!(check.score(faces, side, 1, labels) < 10)) return false;
+    // The polygons around the merged cluster, before and after, swapped in the ledger; every
+    // polygon after needs a triangulation whose diagonals are neither edges nor another
+    // polygon's possible diagonals.
+    auto before = [&](uint32_t f) { return labels[f]; };
+    auto after = [&](uint32_t f) { return labels[f] == b ? a : labels[f]; };
+    old_polygons.clear(), new_polygons.clear();
+    old_offsets.assign(1, 0), new_offsets.assign(1, 0);
+    for (uint32_t v : corners.vertices_of(faces)) {
+      if (corners.at(v, before)) {
+        old_polygons.insert(old_polygons.end(), corners.polygon().begin(), corners.polygon().end());
+        old_offsets.push_back(uint32_t(old_polygons.size()));
+      }
+      if (corners.at(v, after)) {
+        new_polygons.insert(new_polygons.end(), corners.polygon().begin(), corners.polygon().end());
+        new_offsets.push_back(uint32_t(new_polygons.size()));
+      }
+    }
+    auto swap_in = [&](const std::vector<uint32_t>& out, const std::vector<uint32_t>& out_offsets,
+                       const std::vector<uint32_t>& in, const std::vector<uint32_t>& in_offsets) {
+      for (size_t i = 0; i + 1 < out_offsets.size(); ++i)
+        ledger.add(&out[out_offsets[i]], out_offsets[i + 1] - out_offsets[i], -1);
+      for (size_t i = 0; i + 1 < in_offsets.size(); ++i)
+        ledger.add(&in[in_offsets[i]], in_offsets[i + 1] - in_offsets[i], +1);
+    };
+    swap_in(old_polygons, old_offsets, new_polygons, new_offsets);
+    auto contains = [](const std::vector<uint32_t>& list, uint32_t x) {
+      return std::binary_search(list.begin(), list.end(), x);
+    };
+    auto taken = [&](uint32_t x, uint32_t y) {
+      if (ledger.count(x, y) > 1) return true;  // this polygon's own candidacy is one
+      if (y == a) std::swap(x, y);
+      if (x == a) return contains(neighbours[a], y) || contains(neighbours[b], y);
+      return contains(neighbours[x], y);
+    };
+    for (size_t i = 0; i + 1 < new_offsets.size(); ++i)
+      if (!corners.triangulable(&new_polygons[new_offsets[i]], new_offsets[i + 1] - new_offsets[i], taken)) {
+        swap_in(new_polygons, new_offsets, old_polygons, old_offsets);
+        return false;
+      }
+    return true;  // the merge follows: the ledger already holds its polygons
   };
   uint32_t merges = 0;
   while (!heap.empty()) {
@@ -1008,18 +1238,203 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
   return merges;
 }
 
+// When merge_down stops above a target, every merge left would break the dual: in the dual's terms
+// the triangulation is irreducible, each edge (a, b) on a triangle (a, b, z) that bounds no face (z
+// next to both a and b away from the ends of their border), whose contraction would pinch the
+// surface. Near the fewest vertices a surface allows (10 for genus 3) greedy contraction stops
+// there, well above the target. An edge flip takes such a triangle apart: the strip of faces of one
+// of x, z (x one of a, b) along their border goes to a cluster u at an end of that border, so x and
+// z no longer touch (the dual edge (x, z) becomes the edge from u to the other end). One flip that
+// makes a merge valid, and that merge, are made here: pairs cheapest first; a candidate must leave
+// every cluster it touches fit (RegionCheck), with three neighbours or more, and the corner polygons
+// around it triangulable, and then pass find_dual_defects on the whole component (at most
+// kMaxFullChecks of those per call). Returns the labels with one cluster less (the last id takes the
+// merged one's), or empty when no flip helps.
+template <class DefectsOf>
+std::vector<uint32_t> flip_then_merge(const Mesh& mesh, const Topology& topology, const FaceData& data,
+                                      RegionCheck& check, CornerPolygons& corners, const std::vector<uint32_t>& labels,
+                                      uint32_t clusters, const std::vector<uint32_t>& targets, DefectsOf defects_of) {
+  constexpr size_t kMaxPairs = 64;         // cheapest pairs tried per call
+  constexpr uint32_t kMaxFullChecks = 16;  // find_dual_defects calls per call
+  const ClusterView view = view_of(topology, data, labels, clusters);
+  const std::vector<uint32_t> held = clusters_per_component(topology, labels, clusters);
+  struct Pair {
+    double cost;
+    uint32_t a, b;
+  };
+  std::vector<Pair> pairs;
+  for (uint32_t a = 0; a < clusters; ++a)
+    for (uint32_t i = view.neighbour_offsets[a]; i < view.neighbour_offsets[a + 1]; ++i) {
+      uint32_t b = view.neighbours[i], c = view.component[a];
+      if (b <= a || held[c] <= targets[c]) continue;
+      double w = view.weight[a] + view.weight[b];
+      double cost = w > 0 ? view.weight[a] * view.weight[b] / w *
+                                squared_distance3(&view.centroid[3 * size_t(a)], &view.centroid[3 * size_t(b)])
+                          : 0.0;
+      pairs.push_back({cost, a, b});
+    }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
+    return x.cost != y.cost ? x.cost < y.cost : x.a != y.a ? x.a < y.a : x.b < y.b;
+  });
+  if (pairs.size() > kMaxPairs) pairs.resize(kMaxPairs);
+
+  auto members_of = [&](uint32_t c) {
+    return std::span<const uint32_t>(view.members.data() + view.offsets[c], view.size(c));
+  };
+  auto neighbours_of = [&](uint32_t c) {
+    return std::span<const uint32_t>(view.neighbours.data() + view.neighbour_offsets[c], view.valence(c));
+  };
+  // `work`: the labels with the candidate flip and merge applied (b's faces labelled a), undone
+  // after each candidate.
+  std::vector<uint32_t> work = labels, vertex_mark(mesh.vertex_count(), kNone);
+  std::vector<uint32_t> strip, touched, faces;
+  std::vector<uint8_t> side;
+  std::vector<std::vector<uint32_t>> touched_neighbours;
+  const std::vector<DualDefect> before = defects_of(labels, clusters);
+  const std::vector<uint32_t> broken_before = defects_per_component(topology, labels, clusters, before);
+  uint32_t full_checks = 0;
+  for (const Pair& p : pairs) {
+    std::vector<uint32_t> common;
+    std::span<const uint32_t> na = neighbours_of(p.a), nb = neighbours_of(p.b);
+    std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
+    // A valid merge needs a and b to have exactly the two clusters at the ends of their border in
+    // common (one on the boundary); one flip takes one away, so more than three is out of reach.
+    if (common.size() > 3) continue;
+    for (uint32_t z : common)
+      for (uint32_t x : {p.a, p.b})
+        for (uint32_t giver : {x, z}) {
+          const uint32_t other = giver == x ? z : x;
+          // The strip: faces of giver with a corner on a face of other.
+          for (uint32_t f : members_of(other))
+            for (int k = 0; k < 3; ++k) vertex_mark[mesh.indices[3 * size_t(f) + k]] = other;
+          strip.clear();
+          for (uint32_t f : members_of(giver))
+            for (int k = 0; k < 3; ++k)
+              if (vertex_mark[mesh.indices[3 * size_t(f) + k]] == other) {
+                strip.push_back(f);
+                break;
+              }
+          for (uint32_t f : members_of(other))
+            for (int k = 0; k < 3; ++k) vertex_mark[mesh.indices[3 * size_t(f) + k]] = kNone;
+          if (strip.empty() || strip.size() == view.size(giver)) continue;
+          // Every other cluster at a corner of the strip: the ends of the border (receivers), and
+          // whatever else the strip touches (their borders change too).
+          std::vector<uint32_t> around;
+          for (uint32_t f : strip)
+            for (int k = 0; k < 3; ++k) {
+              uint32_t v = mesh.indices[3 * size_t(f) + k];
+              for (uint32_t i = topology.vertex_face_offsets[v]; i < topology.vertex_face_offsets[v + 1]; ++i) {
+                uint32_t l = labels[topology.vertex_faces[i]];
+                if (l != giver) around.push_back(l);
+              }
+            }
+          std::sort(around.begin(), around.end());
+          around.erase(std::unique(around.begin(), around.end()), around.end());
+          for (uint32_t u : around) {
+            if (u == x || u == z) continue;
+            const uint32_t merged_into = p.a;
+            auto after = [&](uint32_t c) { return c == p.b ? merged_into : c; };
+            for (uint32_t f : strip) work[f] = after(u);
+            for (uint32_t f : members_of(p.b))
+              if (work[f] == p.b) work[f] = merged_into;
+            // The clusters whose faces or borders change, as they are after the flip and merge:
+            // those around the strip and the merged one get their faces scored and their
+            // neighbours listed again; the other neighbours of a and b keep their faces and lose at
+            // most b (now a): their lists are the old ones renamed, and need three entries.
+            // Those rescored come first, the likeliest to fail first: the merged cluster, giver, u.
+            touched.clear();
+            auto touch = [&](uint32_t c) {
+              if (std::find(touched.begin(), touched.end(), c) == touched.end()) touched.push_back(c);
+            };
+            for (uint32_t c : {merged_into, after(giver), after(u)}) touch(c);
+            for (uint32_t c : around) touch(after(c));
+            const size_t rescored = touched.size();
+            for (uint32_t k : {p.a, p.b})
+              for (uint32_t c : neighbours_of(k)) touch(after(c));
+            bool ok = true;
+            touched_neighbours.assign(touched.size(), {});
+            for (size_t t = 0; t < touched.size() && ok; ++t) {
+              const uint32_t c = touched[t];
+              std::vector<uint32_t>& nc = touched_neighbours[t];
+              if (t >= rescored) {
+                for (uint32_t o : neighbours_of(c)) nc.push_back(after(o));
+              } else {
+                // Its faces now: its own still labelled c, b's if it is the merged one, the strip
+                // if it is u.
+                uint32_t sources[3] = {c, kNone, kNone};
+                if (c == merged_into) sources[1] = p.b;
+                if (c == after(u) && giver != c && giver != sources[1]) sources[2] = giver;
+                faces.clear();
+                for (uint32_t k : sources)
+                  if (k != kNone)
+                    for (uint32_t f : members_of(k))
+                      if (work[f] == c) faces.push_back(f);
+                for (uint32_t f : faces)
+                  for (int e = 0; e < 3; ++e) {
+                    uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
+                    if (o != kNone && work[o] != c) nc.push_back(work[o]);
+                  }
+                side.assign(faces.size(), 0);
+                ok = !faces.empty() && check.score(faces, side, 1, work) < 10;
+              }
+              std::sort(nc.begin(), nc.end());
+              nc.erase(std::unique(nc.begin(), nc.end()), nc.end());
+              nc.erase(std::remove(nc.begin(), nc.end(), c), nc.end());
+              ok = ok && nc.size() >= 3;
+            }
+            // Corner polygons around the changed clusters, with the neighbours as they are now.
+            auto adjacent = [&](uint32_t s, uint32_t t) {
+              auto it = std::find(touched.begin(), touched.end(), s);
+              if (it == touched.end()) {
+                it = std::find(touched.begin(), touched.end(), t);
+                if (it == touched.end()) {  // neither changed: as before
+                  std::span<const uint32_t> ns = neighbours_of(s);
+                  return std::binary_search(ns.begin(), ns.end(), t);
+                }
+                std::swap(s, t);
+              }
+              const std::vector<uint32_t>& ns = touched_neighbours[size_t(it - touched.begin())];
+              return std::binary_search(ns.begin(), ns.end(), t);
+            };
+            if (ok) {
+              faces.clear();
+              for (uint32_t k : {p.a, p.b, u})
+                for (uint32_t f : members_of(k)) faces.push_back(f);
+              faces.insert(faces.end(), strip.begin(), strip.end());
+              ok = corners.all_triangulable(faces, [&](uint32_t f) { return work[f]; }, adjacent);
+            }
+            if (ok && full_checks < kMaxFullChecks) {
+              ++full_checks;
+              std::vector<uint32_t> merged = work;
+              if (p.b != clusters - 1)
+                for (uint32_t& l : merged)
+                  if (l == clusters - 1) l = p.b;
+              std::vector<DualDefect> found = defects_of(merged, clusters - 1);
+              std::vector<uint32_t> broken = defects_per_component(topology, merged, clusters - 1, found);
+              const uint32_t c = view.component[p.a];
+              if (broken[c] == 0 && found.size() <= before.size() - broken_before[c]) return merged;
+            }
+            for (uint32_t f : members_of(p.b)) work[f] = p.b;
+            for (uint32_t f : strip) work[f] = giver;
+            if (full_checks >= kMaxFullChecks) return {};
+          }
+        }
+  }
+  return {};
+}
+
 // merge_down by energy, and per component where that stops above its target, by weight.
 std::vector<uint32_t> merge_down_twice(const Topology& topology, const FaceData& data, RegionCheck& check,
-                                       const std::vector<uint32_t>& labels, uint32_t clusters,
-                                       const std::vector<uint32_t>& targets) {
+                                       CornerPolygons& corners, const std::vector<uint32_t>& labels,
+                                       uint32_t clusters, const std::vector<uint32_t>& targets) {
   std::vector<uint32_t> by_energy = labels;
-  merge_down(topology, data, check, by_energy, clusters, targets);
+  merge_down(topology, data, check, corners, by_energy, clusters, targets);
   std::vector<uint32_t> held = clusters_per_component(topology, by_energy, *std::max_element(by_energy.begin(), by_energy.end()) + 1);
   bool stuck = false;
   for (size_t c = 0; c < targets.size(); ++c) stuck = stuck || held[c] > targets[c];
   if (!stuck) return by_energy;
   std::vector<uint32_t> by_weight = labels;
-  merge_down(topology, data, check, by_weight, clusters, targets, true);
+  merge_down(topology, data, check, corners, by_weight, clusters, targets, true);
   std::vector<uint32_t> held_w = clusters_per_component(topology, by_weight, *std::max_element(by_weight.begin(), by_weight.end()) + 1);
   // Take each stuck component from the weight order where that one reached its target.
   for (size_t c = 0; c < targets.size(); ++c)
@@ -1037,6 +1452,32 @@ std::vector<uint32_t> merge_down_twice(const Topology& topology, const FaceData&
   return by_energy;
 }
 
+// merge_down_twice, then where both orders stop above a target, flips (flip_then_merge) and
+// merge_down again until the targets are met or no flip helps.
+// Flips are for the last few clusters above a target (irreducible triangulations of the surfaces
+// met so far stop within a few dozen of it); further above, or once kMaxFlips are made, it stops:
+// each flip costs a few linear passes.
+template <class DefectsOf>
+std::vector<uint32_t> merge_down_with_flips(const Mesh& mesh, const Topology& topology, const FaceData& data,
+                                            RegionCheck& check, CornerPolygons& corners,
+                                            const std::vector<uint32_t>& labels, uint32_t clusters,
+                                            const std::vector<uint32_t>& targets, DefectsOf defects_of) {
+  constexpr uint32_t kMaxFlips = 64;
+  std::vector<uint32_t> result = merge_down_twice(topology, data, check, corners, labels, clusters, targets);
+  for (uint32_t flips = 0;; ++flips) {
+    uint32_t count = *std::max_element(result.begin(), result.end()) + 1;
+    std::vector<uint32_t> held = clusters_per_component(topology, result, count);
+    uint32_t excess = 0;
+    for (size_t c = 0; c < targets.size(); ++c) excess += held[c] > targets[c] ? held[c] - targets[c] : 0;
+    if (excess == 0 || excess + flips > kMaxFlips) return result;
+    std::vector<uint32_t> flipped =
+        flip_then_merge(mesh, topology, data, check, corners, result, count, targets, defects_of);
+    if (flipped.empty()) return result;
+    result = std::move(flipped);
+    merge_down(topology, data, check, corners, result, count - 1, targets);
+  }
+}
+
 // The fix loop on one clustering: rounds of fix_round until no defect is left; once valid, the
 // iteration smooths the fixed clusters: fully (it may bring defects back: the energy can prefer a
 // ring around a thin part; rounds without iterating then fix them), else in growing steps that
@@ -1046,8 +1487,9 @@ class FixLoop {
 
  public:
   FixLoop(const Mesh& mesh, const Topology& topology, const CoarsenMeshOptions& options, const FaceData& data,
-          RegionCheck& check, ClusterCutter& cutter)
-      : mesh_(mesh), topology_(topology), options_(options), data_(data), check_(check), cutter_(cutter),
+          RegionCheck& check, CornerPolygons& corners, ClusterCutter& cutter)
+      : mesh_(mesh), topology_(topology), options_(options), data_(data), check_(check), corners_(corners),
+        cutter_(cutter),
         weights_(options.cluster.density.empty() ? nullptr : &options.cluster.density) {}
 
   struct Outcome {
@@ -1146,9 +1588,13 @@ class FixLoop {
   void fix_rounds(Outcome& out, std::vector<uint32_t>& labels) {
     std::vector<DualDefect> defects = out.defects;
     const uint32_t clusters = clusters_;
+    // Rounds are a function of the labels: labels seen before mean the rounds go round in a cycle
+    // (a cut undone by a later round's merge), and the rest of them would only repeat it.
+    std::vector<uint64_t> seen{labels_hash(labels)};
     for (uint32_t r = 0; !defects.empty() && r < options_.max_fix_rounds; ++r) {
       ClusterView view = view_of(topology_, data_, labels, clusters);
-      std::vector<CoarsenFix> fixes = fix_round(topology_, view, defects, first_round_ + out.rounds, cutter_, check_, labels);
+      std::vector<CoarsenFix> fixes =
+          fix_round(topology_, view, defects, first_round_ + out.rounds, cutter_, check_, corners_, labels);
       if (fixes.empty()) break;  // nothing this loop can change any more
       ++out.rounds;
       for (CoarsenFix& f : fixes) f.clusters = clusters;
@@ -1156,7 +1602,17 @@ class FixLoop {
       defects = defects_of(labels, clusters);
       if (defects.size() < out.defects.size() || defects.empty())
         out.labels = labels, out.defects = defects, out.clustering.reset();
+      uint64_t h = labels_hash(labels);
+      if (std::find(seen.begin(), seen.end(), h) != seen.end()) break;
+      seen.push_back(h);
     }
+  }
+
+  // FNV-1a over the labels.
+  static uint64_t labels_hash(const std::vector<uint32_t>& labels) {
+    uint64_t h = 14695981039346656037ull;
+    for (uint32_t l : labels) h = (h ^ l) * 1099511628211ull;
+    return h;
   }
 
   const Mesh& mesh_;
@@ -1164,6 +1620,7 @@ class FixLoop {
   const CoarsenMeshOptions& options_;
   const FaceData& data_;
   RegionCheck& check_;
+  CornerPolygons& corners_;
   ClusterCutter& cutter_;
   const std::vector<float>* weights_;
   uint32_t first_round_ = 1, clusters_ = 0;
@@ -1291,8 +1748,10 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
   if (out.initial_defects > 0 && options.max_fix_rounds > 0) {
     FaceData data = face_data(mesh, options.cluster.density);
     RegionCheck check(mesh, topology, data);
+    CornerPolygons corners(mesh, topology);
     ClusterCutter cutter(mesh, topology, data, check);
-    FixLoop loop(mesh, topology, options, data, check, cutter);
+    FixLoop loop(mesh, topology, options, data, check, corners, cutter);
+    auto defects_of = [&](const std::vector<uint32_t>& l, uint32_t clusters) { return loop.defects_of(l, clusters); };
     FixLoop::Outcome result = loop.run(labels, &clustering, co, true, 1);
     out.fix_rounds = result.rounds;
     out.fix_iterations = result.iterations;
@@ -1326,7 +1785,8 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
       std::vector<uint32_t> targets = fine_counts;  // components not merged back keep their count
       for (uint32_t c = 0; c < topology.component_count; ++c)
         if (broken[c] > 0 && broken_fine[c] == 0) targets[c] = out.allocation.clusters[c];
-      std::vector<uint32_t> merged = merge_down_twice(topology, data, check, fixed.labels, fo.clusters, targets);
+      std::vector<uint32_t> merged =
+          merge_down_with_flips(mesh, topology, data, check, corners, fixed.labels, fo.clusters, targets, defects_of);
       uint32_t merged_count = *std::max_element(merged.begin(), merged.end()) + 1;
       std::vector<uint32_t> held = clusters_per_component(topology, merged, merged_count);
       std::vector<uint32_t> composed = result.labels;
@@ -1373,7 +1833,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
         if (broken[c] > 0 && out.allocation.faces[c] <= kMaxFacesPerFaceStart) direct[f] = next_id++;
       }
       std::vector<uint32_t> start_counts = clusters_per_component(topology, direct, next_id);
-      direct = merge_down_twice(topology, data, check, direct, next_id, targets);
+      direct = merge_down_with_flips(mesh, topology, data, check, corners, direct, next_id, targets, defects_of);
       uint32_t merged_count = *std::max_element(direct.begin(), direct.end()) + 1;
       std::vector<uint32_t> held = clusters_per_component(topology, direct, merged_count);
       std::vector<uint32_t> composed = result.labels;

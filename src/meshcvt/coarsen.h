@@ -282,8 +282,12 @@ struct CoarsenMeshResult {
 ///     are fixed by more rounds, else the smoothing is redone in steps that keep the dual valid;
 ///  4. components of manifold surfaces still broken: a valid clustering at 2n, 4n, ... 32n (at
 ///     least 4 faces per cluster) is merged back to n by merges that keep the dual valid (the link
-///     condition of an edge contraction) and replaces them; then components of at most 20000 faces
-///     still broken are rebuilt from one cluster per face merged down the same way;
+///     condition of an edge contraction, and every corner of four or more clusters keeping a
+///     triangulation without an edge used twice) and replaces them; where greedy merging stops
+///     above n (near the fewest vertices the surface allows), a dual edge flip (a strip of faces
+///     along a border handed to the cluster at its end) opens a merge again; then components of at
+///     most 20000 faces still broken are rebuilt from one cluster per face merged down the same
+///     way. Fix rounds that come back to labels they had before stop (a cycle);
 ///  5. coarsen_clustering of the clustering with the fewest defects.
 /// Degenerate triangles (geometry, not topology) are not fixed.
 ///
