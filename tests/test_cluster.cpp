@@ -355,3 +355,31 @@ TEST_CASE("a real scanned mesh: converges, hierarchical init beats random, guara
   // hierarchical init starts closer to a CVT than random growth does
   CHECK(h.history.front().energy < r.history.front().energy);
 }
+
+TEST_CASE("face_fixed: each contribution is llround of its double value (half away from zero)") {
+  // face_fixed rounds inline; the fixed-point sums, and so every label, depend on it agreeing with
+  // std::llround exactly. Random faces of a bumpy grid and a scanned mesh, all three metrics, plus
+  // the weights rescaled so that many products land on or near .5.
+  Mesh meshes[] = {test::grid(24, 24, 1, 1, 0.3), read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off")};
+  for (Mesh& m : meshes)
+    for (Metric metric : {Metric::cvt, Metric::ccvt, Metric::l21}) {
+      ClusterOptions o;
+      o.clusters = 4;
+      o.metric = metric;
+      ClusterProblem pr = make_cluster_problem(m, o);
+      for (double scale : {1.0, 0.0}) {
+        if (scale == 0.0) pr.fixed_scale = 2.0;  // small integers times w: many exact halves
+        for (uint32_t k = 0; k < pr.face_count; ++k) {
+          if (scale == 0.0) pr.weight[k] = float(k % 7) * 0.25f;
+          int64_t v[kSumComponents];
+          pr.face_fixed(k, v);
+          double w = double(pr.weight[k]) * pr.fixed_scale;
+          double px = pr.point[3 * k], py = pr.point[3 * k + 1], pz = pr.point[3 * k + 2];
+          const double exact[kSumComponents] = {w, w * px, w * py, w * pz, w * ((px * px + py * py) + pz * pz)};
+          for (int c = 0; c < kSumComponents; ++c) REQUIRE(v[c] == std::llround(exact[c]));
+        }
+      }
+    }
+  CHECK(std::llround(2.5) == 3);  // what "half away from zero" means, for the reader
+  CHECK(std::llround(-2.5) == -3);
+}
