@@ -176,18 +176,19 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
   size_t kept_count = 0;
   for (size_t k : worker_kept) kept_count += k;
   if (kept_count == nf) return true;
-  std::vector<uint32_t> queue;
-  // Orphans: breadth-first from the kept faces next to them, in face order.
-  for (uint32_t f = 0; f < nf; ++f) {
-    if (!kept[f]) continue;
+  // Orphans: breadth-first from the kept faces next to them, in face order. Those are found from
+  // the orphans (face_adjacent is symmetric), a few percent of the faces, rather than by looking
+  // around every kept face.
+  std::vector<uint32_t> orphans, queue;
+  for (uint32_t f = 0; f < nf; ++f)
+    if (!kept[f]) orphans.push_back(f);
+  for (uint32_t g : orphans)
     for (int e = 0; e < 3; ++e) {
-      uint32_t g = adjacent[3 * size_t(f) + e];
-      if (g != kNone && !kept[g]) {
-        queue.push_back(f);
-        break;
-      }
+      uint32_t f = adjacent[3 * size_t(g) + e];
+      if (f != kNone && kept[f]) queue.push_back(f);
     }
-  }
+  std::sort(queue.begin(), queue.end());
+  queue.erase(std::unique(queue.begin(), queue.end()), queue.end());
   for (size_t head = 0; head < queue.size(); ++head) {
     uint32_t f = queue[head];
     for (int e = 0; e < 3; ++e) {
@@ -200,7 +201,7 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
     }
   }
   // Faces not reachable through manifold edges from any kept face keep their old label.
-  for (uint32_t f = 0; f < nf; ++f)
+  for (uint32_t f : orphans)
     if (!kept[f]) out[f] = labels[f];
   return true;
 }
@@ -218,7 +219,7 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
   const size_t enclosed = enclosed_clusters(graph).size();
   std::vector<uint32_t> next;
   std::vector<float> previous = generators, guide(generators.size());
-  std::vector<int64_t> next_sums;
+  std::vector<int64_t> next_sums, worker_delta;
   std::vector<float> next_generators;
   double momentum = kLloydMomentum;
   uint32_t kept = 0;
@@ -235,16 +236,24 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
       if (enclosed_clusters(next_graph).size() > enclosed) return false;
       // Sums by the centroid variations of the faces that changed cluster (eq. 8), as the
       // iteration does: exact integers, and far fewer faces than a recount.
-      next_sums = sums;
-      int64_t v[kSumComponents];
-      for (uint32_t f = 0; f < problem.face_count; ++f) {
-        if (next[f] == labels[f]) continue;
-        problem.face_fixed(f, v);
-        for (int k = 0; k < kSumComponents; ++k) {
-          next_sums[size_t(labels[f]) * kSumComponents + k] -= v[k];
-          next_sums[size_t(next[f]) * kSumComponents + k] += v[k];
+      // Each worker adds up its faces' variations; integer sums, so any split gives the same.
+      const size_t width = size_t(problem.clusters) * kSumComponents;
+      worker_delta.assign(size_t(pool.size()) * width, 0);
+      pool.run(problem.face_count, [&](size_t begin, size_t end, unsigned w) {
+        int64_t* delta = &worker_delta[size_t(w) * width];
+        int64_t v[kSumComponents];
+        for (size_t f = begin; f < end; ++f) {
+          if (next[f] == labels[f]) continue;
+          problem.face_fixed(uint32_t(f), v);
+          for (int k = 0; k < kSumComponents; ++k) {
+            delta[size_t(labels[f]) * kSumComponents + k] -= v[k];
+            delta[size_t(next[f]) * kSumComponents + k] += v[k];
+          }
         }
-      }
+      });
+      next_sums = sums;
+      for (unsigned w = 0; w < pool.size(); ++w)
+        for (size_t i = 0; i < width; ++i) next_sums[i] += worker_delta[size_t(w) * width + i];
       next_generators = generators_of(problem, next_sums);
       return total_energy(problem, next_sums, next_generators) < energy;
     };
