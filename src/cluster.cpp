@@ -179,6 +179,7 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
     iterate_s += seconds_since(t);
 
     t = Clock::now();
+    it.release_step_memory();  // reset() below re-creates it when another round follows
     std::vector<uint32_t> current = it.labels();
     std::vector<float> generators = it.generators();
     bool repaired = repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair);

@@ -103,6 +103,9 @@ class IterationEngine {
   virtual const std::vector<float>& generators() const = 0;
   /// e.g. "cpu (2 threads)" or the GPU's name.
   virtual std::string description() const = 0;
+  /// Frees what only step() needs (until the next reset), so that repair, which runs between
+  /// rounds, does not add to the peak memory. labels(), generators() and energy() stay valid.
+  virtual void release_step_memory() {}
 };
 
 /// The GPU engine on Vulkan device `device_index` (host/gpu_engine.cpp). Throws DeviceError.
@@ -122,6 +125,7 @@ class BoundaryIteration final : public IterationEngine {
   const std::vector<uint32_t>& labels() const override { return labels_; }
   const std::vector<float>& generators() const override { return generators_; }
   std::string description() const override;
+  void release_step_memory() override;
   const std::vector<int64_t>& sums() const { return sums_; }
 
  private:

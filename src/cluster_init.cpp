@@ -40,12 +40,47 @@ struct DualEdge {
   uint32_t a, b;  // a < b, node ids of the current level
 };
 
+// The faces as the nodes of the first level: their weight and sums computed when asked, so that
+// the largest level keeps no copy of them (32 bytes per face for cvt, 56 for l21, at the peak of
+// the initialization); later levels store their merged nodes.
+struct FaceNodes {
+  const ClusterProblem* problem = nullptr;  // null: the graph's nodes are stored
+  const Mesh* mesh = nullptr;
+  const std::vector<uint32_t>* subset = nullptr;  // node i = face (*subset)[i]; null: node i = face i
+
+  double weight(uint32_t node) const { return problem->weight[face(node)]; }
+  // dims values: w p, then (dims 6) w * centroid in normalized coordinates
+  void sum(uint32_t node, int dims, double* out) const {
+    const uint32_t f = face(node);
+    const double w = problem->weight[f];
+    for (int c = 0; c < 3; ++c) out[c] = w * double(problem->point[3 * size_t(f) + c]);
+    if (dims == 6)
+      for (int c = 0; c < 3; ++c) {
+        double x = 0;
+        for (int k = 0; k < 3; ++k) x += mesh->positions[3 * size_t(mesh->indices[3 * size_t(f) + k]) + c];
+        out[3 + c] = w * ((x / 3 - problem->origin[c]) / problem->extent);
+      }
+  }
+
+ private:
+  uint32_t face(uint32_t node) const { return subset ? (*subset)[node] : node; }
+};
+
 struct DualGraph {
-  std::vector<double> weight;  // per node
+  std::vector<double> weight;  // per node (empty while `faces` supplies the nodes)
   std::vector<double> sum;     // dims per node: sum of w p (then, for l21, sum of w * centroid)
   int dims = 3;
+  FaceNodes faces;             // the first level: nodes are faces
   std::vector<DualEdge> edges; // may hold duplicates (several mesh edges between two clusters)
   uint32_t nodes = 0;
+
+  double node_weight(uint32_t i) const { return faces.problem ? faces.weight(i) : weight[i]; }
+  // Pointer to node i's dims sums: stored, or computed into `scratch`.
+  const double* node_sum(uint32_t i, double* scratch) const {
+    if (!faces.problem) return &sum[dims * size_t(i)];
+    faces.sum(i, dims, scratch);
+    return scratch;
+  }
 };
 
 // For l21 the paper's cost compares mean normals only, and every merge inside a flat region costs
@@ -62,17 +97,19 @@ constexpr double kL21PositionWeight = 0.01;
 // stored: an array of means was 24 bytes per face at the peak of the initialization). dims 3; with
 // dims 6 (l21) the second triple is the centroid sum and adds kL21PositionWeight times the same
 // cost in positions.
-float contraction_cost(const std::vector<double>& weight, const std::vector<double>& sum, int dims, uint32_t i,
-                       uint32_t j) {
-  double wi = weight[i], wj = weight[j];
+float contraction_cost(const DualGraph& g, uint32_t i, uint32_t j) {
+  double wi = g.node_weight(i), wj = g.node_weight(j);
   if (!(wi > 0) || !(wj > 0)) return 0.0f;  // weightless faces merge for free
+  double scratch_i[6], scratch_j[6];
+  const double* si = g.node_sum(i, scratch_i);
+  const double* sj = g.node_sum(j, scratch_j);
   auto squared = [&](int k) {
     double d[3];
-    for (int c = 0; c < 3; ++c) d[c] = sum[dims * size_t(i) + k + c] / wi - sum[dims * size_t(j) + k + c] / wj;
+    for (int c = 0; c < 3; ++c) d[c] = si[k + c] / wi - sj[k + c] / wj;
     return d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
   };
   double d2 = squared(0);
-  if (dims == 6) d2 += kL21PositionWeight * squared(3);
+  if (g.dims == 6) d2 += kL21PositionWeight * squared(3);
   double w = wi + wj;
   return float(wi * wj * d2 / (w * w));
 }
@@ -91,7 +128,7 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
   const size_t ne = g.edges.size();
   const int dims = g.dims;
   std::vector<float> cost(ne);
-  for (size_t e = 0; e < ne; ++e) cost[e] = contraction_cost(g.weight, g.sum, dims, g.edges[e].a, g.edges[e].b);
+  for (size_t e = 0; e < ne; ++e) cost[e] = contraction_cost(g, g.edges[e].a, g.edges[e].b);
 
   // Passes of "mutually cheapest among the still unmatched" grow a matching until it is maximal
   // (or big enough): the costs stay those of the round's start, so one round does the work of
@@ -155,20 +192,31 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
   // Merged weights and sums, in place: new ids are given in increasing order of a group's lowest
   // old id, so r = relabel[node] <= node and slot r has already been read when node is reached.
   // (Separate arrays cost 32 bytes per face at the peak.) The group's lowest member starts the sum.
+  // On the first level the nodes are faces (FaceNodes): the merged nodes go to new arrays of the
+  // new size, in the same order of additions.
   {
+    const bool from_faces = g.faces.problem != nullptr;
+    if (from_faces) {
+      g.weight.assign(next, 0.0);
+      g.sum.assign(dims * size_t(next), 0.0);
+    }
     std::vector<uint8_t> started(next, 0);
+    double scratch[6];
     for (uint32_t node = 0; node < g.nodes; ++node) {
       uint32_t r = relabel[node];
       assert(r <= node);
+      const double w = from_faces ? g.faces.weight(node) : g.weight[node];
+      const double* s = from_faces ? (g.faces.sum(node, dims, scratch), scratch) : &g.sum[dims * size_t(node)];
       if (!started[r]) {
         started[r] = 1;
-        g.weight[r] = g.weight[node];
-        for (int c = 0; c < dims; ++c) g.sum[dims * size_t(r) + c] = g.sum[dims * size_t(node) + c];
+        g.weight[r] = w;
+        for (int c = 0; c < dims; ++c) g.sum[dims * size_t(r) + c] = s[c];
       } else {
-        g.weight[r] += g.weight[node];
-        for (int c = 0; c < dims; ++c) g.sum[dims * size_t(r) + c] += g.sum[dims * size_t(node) + c];
+        g.weight[r] += w;
+        for (int c = 0; c < dims; ++c) g.sum[dims * size_t(r) + c] += s[c];
       }
     }
+    g.faces = FaceNodes{};
     g.weight.resize(next);
     g.sum.resize(dims * size_t(next));
     g.weight.shrink_to_fit();
@@ -220,22 +268,8 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
 
   DualGraph g;
   g.nodes = nf;
-  g.weight.resize(nf);
   g.dims = problem.metric == Metric::l21 ? 6 : 3;
-  const int dims = g.dims;
-  g.sum.resize(dims * size_t(nf));
-  for (uint32_t f = 0; f < nf; ++f) {
-    uint32_t face = face_of(f);
-    double w = problem.weight[face];
-    g.weight[f] = w;
-    for (int c = 0; c < 3; ++c) g.sum[dims * size_t(f) + c] = w * double(problem.point[3 * size_t(face) + c]);
-    if (dims == 6)
-      for (int c = 0; c < 3; ++c) {  // face centroid in normalized coordinates
-        double x = 0;
-        for (int k = 0; k < 3; ++k) x += mesh.positions[3 * size_t(mesh.indices[3 * size_t(face) + k]) + c];
-        g.sum[dims * size_t(f) + 3 + c] = w * ((x / 3 - problem.origin[c]) / problem.extent);
-      }
-  }
+  g.faces = FaceNodes{&problem, &mesh, subset};
   g.edges.reserve(size_t(nf) * 3 / 2);
   for (uint32_t f = 0; f < nf; ++f)
     for (int e = 0; e < 3; ++e) {

@@ -335,6 +335,27 @@ void BoundaryIteration::purge_watches() {
         level_mask_[c] &= ~(uint32_t(1) << __builtin_ctz(levels));
 }
 
+void BoundaryIteration::release_step_memory() {
+  auto release = [](auto& v) { std::remove_reference_t<decltype(v)>().swap(v); };
+  release(destination_);
+  release(proposal_state_);
+  release(disk_refused_);
+  release(vertex_moved_at_);
+  release(dirty_faces_);
+  release(active_);
+  release(active_bits_);
+  release(watches_);
+  release(flushed_at_);
+  release(level_mask_);
+  release(eval_stamp_);
+  release(budget_);
+  release(watch_count_);
+  release(movement_);
+  for (auto& v : worker_moves_) release(v);
+  for (auto& v : worker_rings_) release(v);
+  for (auto& v : worker_stayed_) release(v);
+}
+
 std::string BoundaryIteration::description() const {
   return "cpu (" + std::to_string(pool_.size()) + (pool_.size() == 1 ? " thread)" : " threads)");
 }

@@ -1,6 +1,9 @@
 // meshcvt command-line tool: subcommands register themselves (see command.h); this file parses,
 // dispatches and turns every error into "meshcvt: error: ..." with exit code 1 (2 for bad usage).
 #include <unistd.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include <algorithm>
 #include <cstdio>
@@ -39,6 +42,13 @@ void add_device_option(CLI::App* sub, std::string& device) {
 }  // namespace meshcvt::cli
 
 int main(int argc, char** argv) {
+#if defined(__GLIBC__)
+  // Every phase of a job allocates and frees arrays of a few bytes per face. glibc's default
+  // raises its mmap threshold to the largest block freed so far (up to 32 MB), after which such
+  // arrays come from the heap and stay in the process when freed, so the peak memory becomes the
+  // sum of phases rather than the largest one (1.2M-face bunny: 149 -> 135 bytes per face).
+  mallopt(M_MMAP_THRESHOLD, 1 << 20);
+#endif
   CLI::App app{"meshcvt: mesh clustering by approximating Centroidal Voronoi Tessellation"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "meshcvt 0.1.0");
