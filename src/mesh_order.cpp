@@ -7,6 +7,9 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <thread>
+
+#include "parallel.h"
 
 namespace meshcvt {
 
@@ -24,25 +27,28 @@ uint32_t spread_bits(uint32_t x) {
   return x;
 }
 
-// Face indices sorted by key, stable: two counting passes of 15 bits.
+// Face indices sorted by key, stable: two counting passes of 15 bits over (key, index) pairs, so
+// that each pass reads its input in order.
 std::vector<uint32_t> sort_by_key(const std::vector<uint32_t>& key) {
   const size_t n = key.size();
-  std::vector<uint32_t> order(n), scratch(n);
-  for (size_t i = 0; i < n; ++i) scratch[i] = uint32_t(i);
+  std::vector<uint64_t> pairs(n), scratch(n);
+  for (size_t i = 0; i < n; ++i) pairs[i] = uint64_t(key[i]) << 32 | i;
   std::vector<uint32_t> start(1u << 15);
-  for (int shift : {0, 15}) {
+  for (int shift : {32, 47}) {
     std::fill(start.begin(), start.end(), 0);
-    for (uint32_t i : scratch) ++start[(key[i] >> shift) & 0x7fff];
+    for (uint64_t p : pairs) ++start[(p >> shift) & 0x7fff];
     uint32_t total = 0;
     for (uint32_t& s : start) {
       uint32_t c = s;
       s = total;
       total += c;
     }
-    for (uint32_t i : scratch) order[start[(key[i] >> shift) & 0x7fff]++] = i;
-    scratch.swap(order);
+    for (uint64_t p : pairs) scratch[start[(p >> shift) & 0x7fff]++] = p;
+    pairs.swap(scratch);
   }
-  return scratch;
+  std::vector<uint32_t> order(n);
+  for (size_t i = 0; i < n; ++i) order[i] = uint32_t(pairs[i]);
+  return order;
 }
 
 }  // namespace
@@ -51,27 +57,35 @@ LocalityOrder reorder_for_locality(Mesh& mesh, size_t min_faces) {
   LocalityOrder order;
   const size_t nf = mesh.face_count(), nv = mesh.vertex_count();
   if (nf < min_faces || nf == 0) return order;
+  // The box of all vertices, read in order (a referenced vertex lies in it; an unreferenced one
+  // far away only makes the grid coarser).
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (uint32_t v : mesh.indices)
+  for (size_t v = 0; v < nv; ++v)
     for (int k = 0; k < 3; ++k) {
-      float x = mesh.positions[3 * size_t(v) + k];
+      float x = mesh.positions[3 * v + k];
       lo[k] = std::min(lo[k], x);
       hi[k] = std::max(hi[k], x);
     }
   float extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
   const float scale = extent > 0 && std::isfinite(extent) ? 1023.0f / extent : 0.0f;
   std::vector<uint32_t> key(nf);
-  for (size_t f = 0; f < nf; ++f) {
-    uint32_t code = 0;
-    for (int k = 0; k < 3; ++k) {
-      float c = 0;
-      for (int j = 0; j < 3; ++j) c += mesh.positions[3 * size_t(mesh.indices[3 * f + j]) + k];
-      float cell = (c / 3 - lo[k]) * scale;  // NaN coordinates: cell 0
-      uint32_t q = cell > 0 ? uint32_t(std::min(cell, 1023.0f)) : 0;
-      code |= spread_bits(q) << k;
+  // Keys in parallel (each face's own), the face ranges split in two or more.
+  const unsigned parts = std::max(1u, std::min(4u, std::thread::hardware_concurrency()));
+  std::vector<uint32_t> bounds;
+  for (unsigned p = 0; p <= parts; ++p) bounds.push_back(uint32_t(nf * p / parts));
+  run_ranges(bounds, [&](size_t begin, size_t end, size_t) {
+    for (size_t f = begin; f < end; ++f) {
+      uint32_t code = 0;
+      for (int k = 0; k < 3; ++k) {
+        float c = 0;
+        for (int j = 0; j < 3; ++j) c += mesh.positions[3 * size_t(mesh.indices[3 * f + j]) + k];
+        float cell = (c / 3 - lo[k]) * scale;  // NaN coordinates: cell 0
+        uint32_t q = cell > 0 ? uint32_t(std::min(cell, 1023.0f)) : 0;
+        code |= spread_bits(q) << k;
+      }
+      key[f] = code;
     }
-    key[f] = code;
-  }
+  });
   order.face_of = sort_by_key(key);
   std::vector<uint32_t>().swap(key);
 

@@ -27,9 +27,9 @@ struct LocalityOrder {
 };
 
 /// Reorders `mesh` in place: faces by the Morton (Z-order) code of their centroid on a 1024^3 grid
-/// over the bounding box (ties keep the input order, so the order is deterministic), vertices by
-/// first use in the new face order (unreferenced vertices last, in input order); source_polygon
-/// follows the faces. The geometry and the orientation of every face are unchanged. O(F).
+/// over the bounding box of the vertices (ties keep the input order, so the order is
+/// deterministic), vertices by first use in the new face order (unreferenced vertices last, in
+/// input order); source_polygon follows the faces. The geometry and the orientation of every face are unchanged. O(F).
 /// Meshes with fewer than `min_faces` faces are left as they are (an identity order is returned).
 LocalityOrder reorder_for_locality(Mesh& mesh, size_t min_faces = kLocalityMinFaces);
 
