@@ -228,7 +228,15 @@ struct ClusterView {
 
   uint32_t size(uint32_t c) const { return offsets[c + 1] - offsets[c]; }
   uint32_t valence(uint32_t c) const { return neighbour_offsets[c + 1] - neighbour_offsets[c]; }
+  // The CVT energy a merge of a and b adds: W_a W_b / (W_a + W_b) |c_a - c_b|^2.
+  double merge_cost(uint32_t a, uint32_t b) const;
 };
+
+double ClusterView::merge_cost(uint32_t a, uint32_t b) const {
+  double w = weight[a] + weight[b];
+  return w > 0 ? weight[a] * weight[b] / w * squared_distance3(&centroid[3 * size_t(a)], &centroid[3 * size_t(b)])
+               : 0.0;
+}
 
 ClusterView view_of(const Topology& topology, const FaceData& data, const std::vector<uint32_t>& labels,
                     uint32_t clusters) {
@@ -831,11 +839,7 @@ class MergeFinder {
       for (uint32_t i = view.neighbour_offsets[a]; i < view.neighbour_offsets[a + 1]; ++i) {
         uint32_t b = view.neighbours[i];
         if (b <= a) continue;
-        double w = view.weight[a] + view.weight[b];
-        double cost = w > 0 ? view.weight[a] * view.weight[b] / w *
-                                  squared_distance3(&view.centroid[3 * size_t(a)], &view.centroid[3 * size_t(b)])
-                            : 0.0;
-        pairs_.push_back({cost, a, b});
+        pairs_.push_back({view.merge_cost(a, b), a, b});
       }
     std::sort(pairs_.begin(), pairs_.end(), [](const Pair& x, const Pair& y) {
       if (x.cost != y.cost) return x.cost < y.cost;
@@ -1267,11 +1271,7 @@ std::vector<uint32_t> flip_then_merge(const Mesh& mesh, const Topology& topology
     for (uint32_t i = view.neighbour_offsets[a]; i < view.neighbour_offsets[a + 1]; ++i) {
       uint32_t b = view.neighbours[i], c = view.component[a];
       if (b <= a || held[c] <= targets[c]) continue;
-      double w = view.weight[a] + view.weight[b];
-      double cost = w > 0 ? view.weight[a] * view.weight[b] / w *
-                                squared_distance3(&view.centroid[3 * size_t(a)], &view.centroid[3 * size_t(b)])
-                          : 0.0;
-      pairs.push_back({cost, a, b});
+      pairs.push_back({view.merge_cost(a, b), a, b});
     }
   std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
     return x.cost != y.cost ? x.cost < y.cost : x.a != y.a ? x.a < y.a : x.b < y.b;
