@@ -19,8 +19,8 @@
 // the over-relaxation used to speed up Lloyd's method (e.g. Liu et al., "On centroidal Voronoi
 // tessellation - energy smoothness and fast computation", 2009, compare with it). The energy test
 // is unchanged (the new clusters' own centroids), and a step that fails it is retried without the
-// extrapolation. On the 1.2M bunny -> 10k: energy after the steps 9.89e-5 -> 9.48e-5, iterations
-// after them 234 -> 162 (m = 0.8).
+// extrapolation. On the 1.2M bunny -> 10k, with the steps stopping at a 0.5% gain as they then
+// did: energy after the steps 9.89e-5 -> 9.48e-5, iterations after them 234 -> 162 (m = 0.8).
 #include <algorithm>
 #include <cassert>
 #include <utility>
@@ -221,7 +221,7 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
   std::vector<float> previous = generators, guide(generators.size());
   std::vector<int64_t> next_sums, worker_delta;
   std::vector<float> next_generators;
-  double momentum = kLloydMomentum;
+  double momentum = kLloydMomentum, next_energy = 0;
   uint32_t kept = 0;
   for (uint32_t step = 0; step < max_steps; ++step) {
     for (size_t i = 0; i < generators.size(); ++i)
@@ -255,7 +255,8 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
       for (unsigned w = 0; w < pool.size(); ++w)
         for (size_t i = 0; i < width; ++i) next_sums[i] += worker_delta[size_t(w) * width + i];
       next_generators = generators_of(problem, next_sums);
-      return total_energy(problem, next_sums, next_generators) < energy;
+      next_energy = total_energy(problem, next_sums, next_generators);
+      return next_energy < energy;
     };
     if (!try_step()) {
       if (momentum == 0) break;
@@ -263,7 +264,6 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
       previous = generators;
       continue;
     }
-    double next_energy = total_energy(problem, next_sums, next_generators);
     double gain = (energy - next_energy) / energy;
     labels.swap(next);
     std::swap(graph, next_graph);
