@@ -1386,7 +1386,10 @@ class PartitionRefiner {
     std::vector<uint32_t> labels = it_.labels();
     uint32_t grown = problem_.clusters + add;
     problem_.clusters = grown;
-    std::vector<float> generators = optimal_generators(labels);
+    // The engine's generators are those of its sums; the new clusters are empty (generator 0, as
+    // compute_generator leaves an empty cluster's).
+    std::vector<float> generators = it_.generators();
+    generators.resize(3 * size_t(grown), 0.0f);
     restore_cluster_count(problem_, topology_, generators, labels, grown);
     restart(std::move(labels));
   }
@@ -1432,7 +1435,7 @@ class PartitionRefiner {
       std::vector<uint32_t> merged = saved;
       for (uint32_t& l : merged)
         if (l == drop) l = keep;
-      std::vector<float> generators = optimal_generators(merged);
+      std::vector<float> generators = generators_after_merge(keep, drop);
       restore_cluster_count(problem_, topology_, generators, merged, n);  // splits the worst, into `drop`
       restart(std::move(merged));
       if (it_.energy() < before * (1 - 1e-9)) {
@@ -1464,11 +1467,15 @@ class PartitionRefiner {
     co.device.clear();
     return make_cluster_problem(mesh, co);
   }
-  std::vector<float> optimal_generators(const std::vector<uint32_t>& labels) const {
-    std::vector<int64_t> sums = compute_cluster_sums(problem_, labels, problem_.clusters);
-    std::vector<float> g(3 * size_t(problem_.clusters), 0.0f);
-    for (uint32_t c = 0; c < problem_.clusters; ++c)
-      compute_generator(problem_, &sums[size_t(c) * kSumComponents], &g[3 * size_t(c)]);
+  // The generators once `drop` is merged into `keep`, from the engine's sums (exact integers, the
+  // same as summing the merged labels again): keep's from the two sums, drop's 0 (empty).
+  std::vector<float> generators_after_merge(uint32_t keep, uint32_t drop) const {
+    std::vector<float> g = it_.generators();
+    int64_t merged[kSumComponents];
+    for (int k = 0; k < kSumComponents; ++k)
+      merged[k] = it_.sums()[size_t(keep) * kSumComponents + k] + it_.sums()[size_t(drop) * kSumComponents + k];
+    compute_generator(problem_, merged, &g[3 * size_t(keep)]);
+    std::fill(&g[3 * size_t(drop)], &g[3 * size_t(drop)] + 3, 0.0f);
     return g;
   }
   void restart(std::vector<uint32_t> labels) {
