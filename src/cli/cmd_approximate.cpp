@@ -129,36 +129,32 @@ void run_approximate(ApproximateArgs& a) {
   if (progress)
     options.progress = print_progress;
 
-  auto t0 = Clock::now();
-  ReadOptions ro;
-  ro.weld = !a.no_weld;
-  ReadStats rs;
-  Mesh mesh = read_mesh(a.input, ro, &rs);
   // Large meshes are partitioned in an order with locality (mesh_order.h); --partition is
   // written in the input's.
-  const LocalityOrder order = reorder_for_locality(mesh);
-  double read_s = std::chrono::duration<double>(Clock::now() - t0).count();  // reading and reordering
+  InputMesh input = read_input(a.input, !a.no_weld);
+  const Mesh& mesh = input.mesh;
+  const LocalityOrder& order = input.order;
   Topology topology = build_topology(mesh);
   ShapeApproximation s = approximate_shape(mesh, topology, options);
   if (progress) std::fprintf(stderr, "\r%60s\r", "");
   if (!s.clustering.device_notice.empty() && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s\n", s.clustering.device_notice.c_str());
 
-  t0 = Clock::now();
+  auto t0 = Clock::now();
   WriteOptions wo;
   wo.face_labels = &s.triangle_regions;
   write_mesh(a.output, s.mesh, wo);
   if (!a.polygons.empty()) write_polygon_mesh(a.polygons, s.mesh.positions, s.polygon_offsets, s.polygon_vertices);
   if (!a.partition.empty()) {
-    Mesh input = mesh;
-    restore_input_order(input, order);
+    Mesh original = mesh;
+    restore_input_order(original, order);
     const std::vector<uint32_t> labels = to_input_order(s.labels, order);
     WriteOptions po;
     po.face_labels = &labels;
-    write_mesh(a.partition, input, po);
+    write_mesh(a.partition, original, po);
   }
   double write_s = std::chrono::duration<double>(Clock::now() - t0).count();
-  if (!a.report.empty()) write_report(a, mesh, rs, s, read_s, write_s);
+  if (!a.report.empty()) write_report(a, mesh, input.stats, s, input.seconds, write_s);
   if (!a.quiet) {
     std::printf("%s: %zu faces -> %u regions (%u proxies), %zu vertices, %zu triangles; L2,1 E/A %.6g; "
                 "%zu fixes; %.3f s partition + %.3f s meshing; wrote %s\n",

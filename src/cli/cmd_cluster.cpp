@@ -77,14 +77,10 @@ void run_cluster(const ClusterArgs& a) {
   if (progress)
     options.progress = print_progress;
 
-  auto t0 = Clock::now();
-  ReadOptions ro;
-  ro.weld = !a.no_weld;
-  ReadStats rs;
-  Mesh mesh = read_mesh(a.input, ro, &rs);
   // Large meshes are clustered in an order with locality (mesh_order.h); outputs use the input's.
-  const LocalityOrder order = reorder_for_locality(mesh);
-  double read_s = std::chrono::duration<double>(Clock::now() - t0).count();  // reading and reordering
+  InputMesh input = read_input(a.input, !a.no_weld);
+  Mesh& mesh = input.mesh;
+  const LocalityOrder& order = input.order;
   Clustering c;
   {
     Topology topology = build_topology(mesh);
@@ -95,13 +91,13 @@ void run_cluster(const ClusterArgs& a) {
   if (progress) std::fprintf(stderr, "\r%60s\r", "");
   if (!c.device_notice.empty() && !a.quiet) std::fprintf(stderr, "meshcvt: note: %s\n", c.device_notice.c_str());
 
-  t0 = Clock::now();
+  auto t0 = Clock::now();
   WriteOptions wo;
   wo.face_labels = &c.labels;
   write_mesh(a.output, mesh, wo);
   if (!a.labels.empty()) write_text_file(a.labels, labels_text(c.labels));
   double write_s = std::chrono::duration<double>(Clock::now() - t0).count();
-  if (!a.report.empty()) write_report(a, mesh, c, rs, read_s, write_s);
+  if (!a.report.empty()) write_report(a, mesh, c, input.stats, input.seconds, write_s);
   if (!a.quiet)
     std::printf("%s: %zu faces -> %u clusters (%s, %s init) on %s: %u iterations, %s, energy %.6g -> %.6g, "
                 "%.3f s clustering; wrote %s\n",

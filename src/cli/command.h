@@ -7,6 +7,9 @@
 #include <string>
 
 #include "meshcvt/cluster.h"
+#include "meshcvt/io.h"
+#include "meshcvt/mesh.h"
+#include "meshcvt/mesh_order.h"
 
 namespace meshcvt::cli {
 
@@ -22,6 +25,16 @@ bool stderr_is_terminal();
 /// Progress line on stderr ("\rPHASE iteration N moves M"), for ClusterOptions::progress when
 /// stderr is a terminal.
 void print_progress(const ClusterProgress& progress);
+
+/// The input of a partitioning command: read (weld: merge duplicate vertices), then, when large,
+/// reordered for locality (reorder_for_locality); `order` restores the input's order for outputs.
+struct InputMesh {
+  Mesh mesh;
+  LocalityOrder order;
+  ReadStats stats;
+  double seconds = 0;  ///< reading and reordering
+};
+InputMesh read_input(const std::string& path, bool weld);
 
 /// Appends the --device option (auto|cpu|gpu|gpu:N) to a subcommand.
 void add_device_option(CLI::App* sub, std::string& device);

@@ -6,6 +6,7 @@
 #endif
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <exception>
 #include <new>
@@ -31,6 +32,17 @@ bool stderr_is_terminal() { return isatty(STDERR_FILENO) == 1; }
 void print_progress(const ClusterProgress& p) {
   std::fprintf(stderr, "\r%-8s iteration %5u  moves %10llu", p.phase, p.iteration, (unsigned long long)p.moves);
   std::fflush(stderr);
+}
+
+InputMesh read_input(const std::string& path, bool weld) {
+  auto t0 = std::chrono::steady_clock::now();
+  InputMesh in;
+  ReadOptions ro;
+  ro.weld = weld;
+  in.mesh = read_mesh(path, ro, &in.stats);
+  in.order = reorder_for_locality(in.mesh);
+  in.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return in;
 }
 
 void add_device_option(CLI::App* sub, std::string& device) {
