@@ -157,7 +157,7 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
     cluster_component = label_components(topology, labels, options);
   } else {
     labels = initial_clustering(problem, mesh, topology, options.init, options.clusters, options.seed,
-                                &options.component_clusters);
+                                &options.component_clusters, &pool);
     if (!options.component_clusters.empty()) cluster_component = label_components(topology, labels, options);
     // Lloyd steps keep every cluster inside its component (they only trade faces between adjacent
     // clusters), so per-component counts hold.

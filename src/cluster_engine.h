@@ -61,10 +61,12 @@ double labeling_energy(const ClusterProblem& problem, const std::vector<uint32_t
 /// Initial clustering: exactly `clusters` connected clusters (Section 5.1 or seeded growth).
 /// component_clusters (optional, ClusterOptions::component_clusters, already validated): exactly
 /// that many clusters in each component, numbered component by component for hierarchical.
-/// Null or empty: the original scheme over the whole mesh.
+/// Null or empty: the original scheme over the whole mesh. pool: threads for the hierarchical
+/// scheme (null: the calling thread only); the result does not depend on it.
 std::vector<uint32_t> initial_clustering(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology,
                                          Init init, uint32_t clusters, uint64_t seed,
-                                         const std::vector<uint32_t>* component_clusters = nullptr);
+                                         const std::vector<uint32_t>* component_clusters = nullptr,
+                                         WorkerPool* pool = nullptr);
 
 /// Which clusters touch which (cluster_graph.cpp). The neighbours of cluster c, sorted and unique,
 /// are neighbours[offsets[c] .. offsets[c] + count[c]); open[c]: c has a boundary or non-manifold

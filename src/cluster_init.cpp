@@ -26,11 +26,13 @@
 #include <algorithm>
 #include <cassert>
 #include <cstring>
+#include <memory>
 #include <numeric>
 #include <string>
 
 #include "cluster_engine.h"
 #include "meshcvt/error.h"
+#include "parallel.h"
 
 namespace meshcvt {
 
@@ -49,17 +51,22 @@ struct FaceNodes {
   const std::vector<uint32_t>* subset = nullptr;  // node i = face (*subset)[i]; null: node i = face i
 
   double weight(uint32_t node) const { return problem->weight[face(node)]; }
-  // dims values: w p, then (dims 6) w * centroid in normalized coordinates
-  void sum(uint32_t node, int dims, double* out) const {
+  // dims values: p, then (dims 6) the centroid in normalized coordinates
+  void mean(uint32_t node, int dims, double* out) const {
     const uint32_t f = face(node);
-    const double w = problem->weight[f];
-    for (int c = 0; c < 3; ++c) out[c] = w * double(problem->point[3 * size_t(f) + c]);
+    for (int c = 0; c < 3; ++c) out[c] = double(problem->point[3 * size_t(f) + c]);
     if (dims == 6)
       for (int c = 0; c < 3; ++c) {
         double x = 0;
         for (int k = 0; k < 3; ++k) x += mesh->positions[3 * size_t(mesh->indices[3 * size_t(f) + k]) + c];
-        out[3 + c] = w * ((x / 3 - problem->origin[c]) / problem->extent);
+        out[3 + c] = (x / 3 - problem->origin[c]) / problem->extent;
       }
+  }
+  // dims values: w p, then (dims 6) w * centroid in normalized coordinates
+  void sum(uint32_t node, int dims, double* out) const {
+    mean(node, dims, out);
+    const double w = problem->weight[face(node)];
+    for (int c = 0; c < dims; ++c) out[c] *= w;
   }
 
  private:
@@ -81,6 +88,11 @@ struct DualGraph {
     faces.sum(i, dims, scratch);
     return scratch;
   }
+  // Mean point(s) S / W of node i (weight w > 0) into out[dims].
+  void node_mean(uint32_t i, double w, double* out) const {
+    if (faces.problem) return faces.mean(i, dims, out);
+    for (int c = 0; c < dims; ++c) out[c] = sum[dims * size_t(i) + c] / w;
+  }
 };
 
 // For l21 the paper's cost compares mean normals only, and every merge inside a flat region costs
@@ -93,19 +105,19 @@ struct DualGraph {
 // 0.1613 / 354 -> 0.1616 / 150. Weights 0.1 and 1 were worse on bunny00 (513 and 316 iterations).
 constexpr double kL21PositionWeight = 0.01;
 
-// F(e_ij) from the nodes' weights and sums S (mean points z = S / W, computed here rather than
-// stored: an array of means was 24 bytes per face at the peak of the initialization). dims 3; with
-// dims 6 (l21) the second triple is the centroid sum and adds kL21PositionWeight times the same
-// cost in positions.
+// F(e_ij) from the nodes' weights and mean points z = S / W (on the first level a face's own point,
+// no division; later levels divide the stored sums here rather than keep an array of means, 24
+// bytes per face at the peak of the initialization). dims 3; with dims 6 (l21) the second triple
+// is the mean centroid and adds kL21PositionWeight times the same cost in positions.
 float contraction_cost(const DualGraph& g, uint32_t i, uint32_t j) {
   double wi = g.node_weight(i), wj = g.node_weight(j);
   if (!(wi > 0) || !(wj > 0)) return 0.0f;  // weightless faces merge for free
-  double scratch_i[6], scratch_j[6];
-  const double* si = g.node_sum(i, scratch_i);
-  const double* sj = g.node_sum(j, scratch_j);
+  double zi[6] = {}, zj[6] = {};  // (zeroed: GCC cannot see that dims entries get written)
+  g.node_mean(i, wi, zi);
+  g.node_mean(j, wj, zj);
   auto squared = [&](int k) {
     double d[3];
-    for (int c = 0; c < 3; ++c) d[c] = si[k + c] / wi - sj[k + c] / wj;
+    for (int c = 0; c < 3; ++c) d[c] = zi[k + c] - zj[k + c];
     return d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
   };
   double d2 = squared(0);
@@ -114,57 +126,61 @@ float contraction_cost(const DualGraph& g, uint32_t i, uint32_t j) {
   return float(wi * wj * d2 / (w * w));
 }
 
-// Edge order: cost, then endpoint ids, so that every comparison has one answer.
-bool edge_before(float ca, const DualEdge& a, float cb, const DualEdge& b) {
-  if (ca != cb) return ca < cb;
-  if (a.a != b.a) return a.a < b.a;
-  return a.b < b.b;
+// An edge's place in a round's order: its cost's bits above its index. Costs are floats >= 0, whose
+// bits order like their values, so one integer comparison orders edges by cost and breaks ties by
+// index: every comparison has one answer, and a node's cheapest edge is a plain minimum.
+uint64_t edge_key(float cost, uint32_t e) {
+  assert(cost >= 0.0f);
+  uint32_t bits;
+  std::memcpy(&bits, &cost, sizeof bits);
+  return uint64_t(bits) << 32 | e;
 }
 
 // One round: contract up to `wanted` mutually cheapest edges. Returns the new node id of every old
 // node (ids given in increasing order of the lowest old id, so results never depend on hashing or
-// threads) and updates the graph in place.
-std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
+// threads) and updates the graph in place. The edges' costs are computed in parallel (one per
+// edge, so any split gives the same).
+std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool& pool) {
   const size_t ne = g.edges.size();
   const int dims = g.dims;
-  std::vector<float> cost(ne);
-  for (size_t e = 0; e < ne; ++e) cost[e] = contraction_cost(g, g.edges[e].a, g.edges[e].b);
+  std::vector<float> cost(ne);  // (keys are made from it when needed: half the memory of storing them)
+  pool.run(ne, [&](size_t begin, size_t end, unsigned) {
+    for (size_t e = begin; e < end; ++e) cost[e] = contraction_cost(g, g.edges[e].a, g.edges[e].b);
+  });
+  auto key = [&](uint32_t e) { return edge_key(cost[e], e); };
 
   // Passes of "mutually cheapest among the still unmatched" grow a matching until it is maximal
   // (or big enough): the costs stay those of the round's start, so one round does the work of
   // several without recomputing them.
-  std::vector<uint32_t> best(g.nodes);
+  std::vector<uint64_t> best(g.nodes);
   std::vector<uint8_t> matched(g.nodes, 0);
   std::vector<uint32_t> chosen, open_edges(ne);
   for (uint32_t e = 0; e < ne; ++e) open_edges[e] = e;
   for (int pass = 0; pass < 8 && chosen.size() < wanted && !open_edges.empty(); ++pass) {
-    std::fill(best.begin(), best.end(), kNone);
-    auto offer = [&](uint32_t node, uint32_t e) {
-      uint32_t b = best[node];
-      if (b == kNone || edge_before(cost[e], g.edges[e], cost[b], g.edges[b])) best[node] = e;
-    };
+    std::fill(best.begin(), best.end(), UINT64_MAX);
     size_t kept = 0;
     for (uint32_t e : open_edges) {
-      if (matched[g.edges[e].a] || matched[g.edges[e].b]) continue;
+      const DualEdge edge = g.edges[e];
+      if (matched[edge.a] || matched[edge.b]) continue;
       open_edges[kept++] = e;
-      offer(g.edges[e].a, e);
-      offer(g.edges[e].b, e);
+      const uint64_t k = key(e);
+      best[edge.a] = std::min(best[edge.a], k);
+      best[edge.b] = std::min(best[edge.b], k);
     }
     open_edges.resize(kept);
-    size_t before = chosen.size();
+    const size_t before = chosen.size();
     for (uint32_t e : open_edges) {
-      uint32_t a = g.edges[e].a, b = g.edges[e].b;
-      if (best[a] != e) continue;  // consider each edge once, from its lower end's choice
-      uint32_t other = best[b];
-      if (other != kNone && g.edges[other].a == a && g.edges[other].b == b) chosen.push_back(e);
+      const DualEdge edge = g.edges[e];
+      const uint64_t k = key(e);
+      if (best[edge.a] == k && best[edge.b] == k) chosen.push_back(e);
     }
     if (chosen.size() == before) break;
     for (size_t i = before; i < chosen.size(); ++i) matched[g.edges[chosen[i]].a] = matched[g.edges[chosen[i]].b] = 1;
   }
   assert(!chosen.empty() || ne == 0);
-  if (chosen.size() > wanted) {
-    std::sort(chosen.begin(), chosen.end(),
-              [&](uint32_t x, uint32_t y) { return edge_before(cost[x], g.edges[x], cost[y], g.edges[y]); });
+  if (chosen.size() > wanted) {  // the cheapest `wanted` (keys are distinct; their order is not needed)
+    std::nth_element(chosen.begin(), chosen.begin() + wanted, chosen.end(),
+                     [&](uint32_t x, uint32_t y) { return key(x) < key(y); });
     chosen.resize(wanted);
   }
 
@@ -172,7 +188,7 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
   // edge rebuild below (17 bytes per face on the first round).
   std::vector<float>().swap(cost);
   std::vector<uint32_t>().swap(open_edges);
-  std::vector<uint32_t>().swap(best);
+  std::vector<uint64_t>().swap(best);
   std::vector<uint8_t>().swap(matched);
 
   // New ids in increasing order of a group's lowest node. relabel first holds, at the lower end a
@@ -240,12 +256,16 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
   size_t kept = 0, from = 0;
   for (uint32_t a = 0; a < next; ++a) {
     size_t to = start[a];  // after the fill loop, start[a] is the end of a's run
+    const size_t run_start = kept;
     for (; from < to; ++from) {
       uint32_t b = upper[from];
       if (last_seen[b] == a) continue;
       last_seen[b] = a;
       g.edges[kept++] = DualEdge{a, b};
     }
+    // in increasing upper end (see the first level in hierarchical_clustering)
+    std::sort(g.edges.begin() + run_start, g.edges.begin() + kept,
+              [](const DualEdge& x, const DualEdge& y) { return x.b < y.b; });
   }
   g.edges.resize(kept);
   g.nodes = next;
@@ -256,7 +276,7 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted) {
 // `clusters` clusters; node i of the graph is face subset[i] and local_of[subset[i]] == i. Returns a
 // label per listed face. A null subset means every face, node i = face i (local_of unused).
 std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology,
-                                              uint32_t clusters, const std::vector<uint32_t>* subset = nullptr,
+                                              uint32_t clusters, WorkerPool& pool, const std::vector<uint32_t>* subset = nullptr,
                                               const std::vector<uint32_t>* local_of = nullptr) {
   const uint32_t nf = subset ? uint32_t(subset->size()) : problem.face_count;
   auto face_of = [&](uint32_t node) { return subset ? (*subset)[node] : node; };
@@ -271,13 +291,18 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
   g.dims = problem.metric == Metric::l21 ? 6 : 3;
   g.faces = FaceNodes{&problem, &mesh, subset};
   g.edges.reserve(size_t(nf) * 3 / 2);
-  for (uint32_t f = 0; f < nf; ++f)
+  for (uint32_t f = 0; f < nf; ++f) {
+    const size_t run_start = g.edges.size();
     for (int e = 0; e < 3; ++e) {
       uint32_t o = topology.face_adjacent[3 * size_t(face_of(f)) + e];
       if (o == kNone) continue;
       if (subset) o = (*local_of)[o];  // a neighbour is in the same component, so in the subset
       if (o > f) g.edges.push_back(DualEdge{f, o});
     }
+    // in increasing upper end, as every level's edges: an edge's index then ranks it among equal
+    // costs as its end ids would (edge_key)
+    std::sort(g.edges.begin() + run_start, g.edges.end(), [](const DualEdge& x, const DualEdge& y) { return x.b < y.b; });
+  }
 
   // Level targets: n·2^k, n·2^(k-1), ..., n with n·2^k < F <= n·2^(k+1).
   std::vector<uint32_t> targets;
@@ -289,7 +314,7 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
     while (g.nodes > target) {
       if (g.edges.empty())
         throw OptionError("cannot make " + std::to_string(clusters) + " connected clusters: the face graph has more components");
-      relabels.push_back(contract_round(g, g.nodes - target));
+      relabels.push_back(contract_round(g, g.nodes - target, pool));
     }
   }
   assert(g.nodes == clusters);
@@ -365,7 +390,8 @@ std::vector<uint32_t> random_clustering(const ClusterProblem& problem, const Top
 // components 0..c-1. Random: one seed per component as above, then each component's remaining
 // seeds uniformly among its own free faces, grown breadth-first (growth never leaves a component).
 std::vector<uint32_t> per_component_clustering(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology, Init init,
-                                               const std::vector<uint32_t>& component_clusters, uint64_t seed) {
+                                               const std::vector<uint32_t>& component_clusters, uint64_t seed,
+                                               WorkerPool& pool) {
   const uint32_t nf = problem.face_count, nc = topology.component_count;
   // faces of each component, CSR, in increasing face id; local_of[f] = position within its component
   std::vector<uint32_t> offsets(size_t(nc) + 1, 0), faces(nf), local_of(nf);
@@ -385,7 +411,7 @@ std::vector<uint32_t> per_component_clustering(const ClusterProblem& problem, co
     std::vector<uint32_t> subset;
     for (uint32_t c = 0; c < nc; ++c) {
       subset.assign(faces.begin() + offsets[c], faces.begin() + offsets[c + 1]);
-      std::vector<uint32_t> local = hierarchical_clustering(problem, mesh, topology, component_clusters[c], &subset, &local_of);
+      std::vector<uint32_t> local = hierarchical_clustering(problem, mesh, topology, component_clusters[c], pool, &subset, &local_of);
       for (size_t i = 0; i < subset.size(); ++i) labels[subset[i]] = base + local[i];
       base += component_clusters[c];
     }
@@ -425,7 +451,7 @@ std::vector<uint32_t> per_component_clustering(const ClusterProblem& problem, co
 
 std::vector<uint32_t> initial_clustering(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology,
                                          Init init, uint32_t clusters, uint64_t seed,
-                                         const std::vector<uint32_t>* component_clusters) {
+                                         const std::vector<uint32_t>* component_clusters, WorkerPool* pool) {
   if (clusters == 0) throw OptionError("the number of clusters must be at least 1");
   if (clusters > problem.face_count)
     throw OptionError("cannot make " + std::to_string(clusters) + " clusters from " +
@@ -434,9 +460,11 @@ std::vector<uint32_t> initial_clustering(const ClusterProblem& problem, const Me
     throw OptionError("cannot make " + std::to_string(clusters) + " connected clusters: the mesh has " +
                       std::to_string(topology.component_count) +
                       " connected components (across manifold edges), each needs at least one cluster");
+  std::unique_ptr<WorkerPool> own_pool;
+  if (!pool) pool = (own_pool = std::make_unique<WorkerPool>(1)).get();
   if (component_clusters && !component_clusters->empty())
-    return per_component_clustering(problem, mesh, topology, init, *component_clusters, seed);
-  return init == Init::hierarchical ? hierarchical_clustering(problem, mesh, topology, clusters)
+    return per_component_clustering(problem, mesh, topology, init, *component_clusters, seed, *pool);
+  return init == Init::hierarchical ? hierarchical_clustering(problem, mesh, topology, clusters, *pool)
                                     : random_clustering(problem, topology, clusters, seed);
 }
 

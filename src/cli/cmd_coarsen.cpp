@@ -96,6 +96,7 @@ void run_coarsen(const CoarsenArgs& a) {
   co.threads = a.threads;
   co.flip_edges = !a.no_flips;
 
+  prepare_allocator(a.input);
   auto t0 = Clock::now();
   ReadOptions ro;
   ro.weld = !a.no_weld;

@@ -26,6 +26,11 @@ bool stderr_is_terminal();
 /// stderr is a terminal.
 void print_progress(const ClusterProgress& progress);
 
+/// Tunes the C allocator for a job on the mesh file `input_path` (from its size): large inputs get a
+/// fixed mmap threshold, so that freed per-face arrays go back to the system and the peak memory
+/// stays that of the largest phase. Call before reading the input. read_input() calls it.
+void prepare_allocator(const std::string& input_path);
+
 /// The input of a partitioning command: read (weld: merge duplicate vertices), then, when large,
 /// reordered for locality (reorder_for_locality); `order` restores the input's order for outputs.
 struct InputMesh {
