@@ -18,8 +18,8 @@ void build_cluster_graph(const Topology& topology, const std::vector<uint32_t>& 
   // splits a count the same way every time); each range counts and then writes its own part of
   // every cluster's list, so the lists come out the same for any thread count once sorted.
   const unsigned parts = pool ? pool->size() : 1;
-  auto for_ranges = [&](size_t count, const std::function<void(size_t, size_t, unsigned)>& fn) {
-    if (pool) pool->run(count, fn);
+  auto for_ranges = [&](size_t count, const std::function<void(size_t, size_t, unsigned)>& fn, size_t min_parallel = 2048) {
+    if (pool) pool->run(count, fn, min_parallel);
     else fn(0, count, 0);
   };
   std::vector<uint32_t> part_count(size_t(parts) * nc, 0);  // [part][cluster] cross edges
@@ -64,7 +64,7 @@ void build_cluster_graph(const Topology& topology, const std::vector<uint32_t>& 
       std::sort(first, last);
       g.count[c] = uint32_t(std::unique(first, last) - first);
     }
-  });
+  }, /*min_parallel=*/64);  // a sort per cluster
 }
 
 std::vector<uint32_t> enclosed_clusters(const ClusterGraph& g) {

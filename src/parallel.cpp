@@ -53,9 +53,9 @@ void WorkerPool::worker_loop(unsigned id) {
   }
 }
 
-void WorkerPool::run(size_t count, const std::function<void(size_t, size_t, unsigned)>& fn) {
+void WorkerPool::run(size_t count, const std::function<void(size_t, size_t, unsigned)>& fn, size_t min_parallel) {
   // Small jobs are not worth waking anybody for.
-  if (threads_ == 1 || count < 2048) {
+  if (threads_ == 1 || count < std::max<size_t>(min_parallel, 2)) {
     if (count) fn(0, count, 0);
     return;
   }
