@@ -44,9 +44,10 @@ struct ClusterProblem {
 /// Builds the per-face data. Throws OptionError for bad density arrays.
 ClusterProblem make_cluster_problem(const Mesh& mesh, const ClusterOptions& options);
 
-/// Sums of every cluster from scratch.
+/// Sums of every cluster from scratch. pool (optional): workers add up ranges of faces, and the
+/// integer partial sums are added, so the result is the same for any thread count.
 std::vector<int64_t> compute_cluster_sums(const ClusterProblem& problem, const std::vector<uint32_t>& labels,
-                                          uint32_t clusters);
+                                          uint32_t clusters, WorkerPool* pool = nullptr);
 
 /// Generator of one cluster from its sums (cvt: mass centroid; ccvt: closest mesh point to it;
 /// l21: normalized S). Empty clusters (W = 0) keep `g` unchanged. Bit-identical wherever it runs.

@@ -234,7 +234,7 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
 uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topology, WorkerPool& pool,
                            std::vector<uint32_t>& labels, uint32_t max_steps, double min_relative_gain) {
   if (problem.clusters == 0 || max_steps == 0) return 0;
-  std::vector<int64_t> sums = compute_cluster_sums(problem, labels, problem.clusters);
+  std::vector<int64_t> sums = compute_cluster_sums(problem, labels, problem.clusters, &pool);
   std::vector<float> generators = generators_of(problem, sums);
   double energy = total_energy(problem, sums, generators);
   ClusterGraph graph, next_graph;

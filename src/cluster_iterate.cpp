@@ -246,7 +246,7 @@ void BoundaryIteration::reset(std::vector<uint32_t> labels) {
   const uint32_t nf = problem_.face_count, nc = problem_.clusters;
   labels_ = std::move(labels);
   assert(labels_.size() == nf);
-  sums_ = compute_cluster_sums(problem_, labels_, nc);
+  sums_ = compute_cluster_sums(problem_, labels_, nc, &pool_);
   generators_.assign(3 * size_t(nc), 0.0f);
   for (uint32_t c = 0; c < nc; ++c) compute_generator(problem_, &sums_[size_t(c) * kSumComponents], &generators_[3 * c]);
   destination_.assign(nf, kNone);

@@ -7,6 +7,7 @@
 
 #include "cluster_engine.h"
 #include "meshcvt/error.h"
+#include "parallel.h"
 #include "triangle_bvh.h"
 
 namespace meshcvt {
@@ -101,15 +102,30 @@ ClusterProblem make_cluster_problem(const Mesh& mesh, const ClusterOptions& opti
 }
 
 std::vector<int64_t> compute_cluster_sums(const ClusterProblem& problem, const std::vector<uint32_t>& labels,
-                                          uint32_t clusters) {
-  std::vector<int64_t> sums(size_t(clusters) * kSumComponents, 0);
-  int64_t v[kSumComponents];
-  for (uint32_t f = 0; f < problem.face_count; ++f) {
-    assert(labels[f] < clusters);
-    problem.face_fixed(f, v);
-    int64_t* s = &sums[size_t(labels[f]) * kSumComponents];
-    for (int c = 0; c < kSumComponents; ++c) s[c] += v[c];
+                                          uint32_t clusters, WorkerPool* pool) {
+  const size_t width = size_t(clusters) * kSumComponents;
+  auto add_range = [&](size_t begin, size_t end, int64_t* sums) {
+    int64_t v[kSumComponents];
+    for (size_t f = begin; f < end; ++f) {
+      assert(labels[f] < clusters);
+      problem.face_fixed(uint32_t(f), v);
+      int64_t* s = &sums[size_t(labels[f]) * kSumComponents];
+      for (int c = 0; c < kSumComponents; ++c) s[c] += v[c];
+    }
+  };
+  std::vector<int64_t> sums(width, 0);
+  // Workers' partial sums cost width per worker: worth it only while that is small next to the faces.
+  const unsigned workers = pool ? pool->size() : 1;
+  if (workers == 1 || width > problem.face_count) {
+    add_range(0, problem.face_count, sums.data());
+    return sums;
   }
+  std::vector<int64_t> partial(size_t(workers - 1) * width, 0);
+  pool->run(problem.face_count, [&](size_t begin, size_t end, unsigned w) {
+    add_range(begin, end, w == 0 ? sums.data() : &partial[size_t(w - 1) * width]);
+  });
+  for (unsigned w = 1; w < workers; ++w)
+    for (size_t i = 0; i < width; ++i) sums[i] += partial[size_t(w - 1) * width + i];
   return sums;
 }
 
