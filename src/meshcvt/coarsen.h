@@ -260,7 +260,8 @@ struct CoarsenMeshResult {
   /// with the fewest defects.
   bool defects_remain = false;
   double cluster_seconds = 0;  ///< the first cluster() call
-  double fix_seconds = 0;      ///< defect searches, fixes and the fix rounds' cluster() calls
+  double fix_seconds = 0;      ///< defect searches, fixes and the fix rounds' cluster() calls (0 when the
+                               ///< first coarse mesh had no defect: building it was the search)
   double coarsen_seconds = 0;  ///< the final coarsen_clustering
 };
 
