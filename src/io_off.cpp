@@ -16,26 +16,33 @@
 namespace meshcvt::io {
 namespace {
 
-// Next token on the current line; '#' starts a comment that runs to the end of the line.
+// Next token on the current line; '#' starts a comment that runs to the end of the line. One pass
+// over the characters (looking for '#' in each token afterwards was a third of the reading time).
 std::string_view off_token(TextCursor& c) {
-  std::string_view token = c.token();
-  const size_t hash = token.find('#');
-  if (hash != std::string_view::npos) {
-    c.p = token.data() + hash;
-    while (c.p < c.end && !is_line_end(*c.p)) ++c.p;
-    token = token.substr(0, hash);
-  }
+  c.skip_blanks();
+  const char* start = c.p;
+  const char* p = c.p;
+  while (p < c.end && !is_blank(*p) && !is_line_end(*p) && *p != '#') ++p;
+  const std::string_view token(start, static_cast<size_t>(p - start));
+  if (p < c.end && *p == '#')
+    while (p < c.end && !is_line_end(*p)) ++p;
+  c.p = p;
   return token;
+}
+
+// Moves to the start of the next line with content (past its leading blanks); false at the end
+// of the file. A line has content when, after its blanks, neither its end nor a comment follows.
+bool skip_empty_lines(TextCursor& c) {
+  for (;;) {
+    c.skip_blanks();
+    if (c.at_end()) return false;
+    if (!is_line_end(*c.p) && *c.p != '#') return true;
+    c.next_line();
+  }
 }
 
 // True when the line at the cursor holds nothing but blanks and comments (cursor unchanged).
 bool line_is_empty(TextCursor c) { return off_token(c).empty(); }
-
-// Moves to the start of the next line with content; false at the end of the file.
-bool skip_empty_lines(TextCursor& c) {
-  while (!c.at_end() && line_is_empty(c)) c.next_line();
-  return !c.at_end();
-}
 
 // Next token of the header, crossing line ends, blank lines and comments; empty at the end.
 std::string_view header_token(TextCursor& c) {
