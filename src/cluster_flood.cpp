@@ -57,10 +57,20 @@ std::vector<float> generators_of(const ClusterProblem& problem, const std::vecto
 //  2. every cluster keeps the edge-connected piece holding its face closest to its generator;
 //  3. faces of the other pieces go, in breadth-first order from the kept pieces (faces in id
 //     order), to the cluster of the neighbour that reaches them first.
+// Also gives, without further passes over the faces, what the caller needs of the new labels:
+// their cluster graph (`out_graph`, as build_cluster_graph would make it) and the change of the
+// cluster sums (`delta`, clusters x kSumComponents, eq. 8's centroid variations).
 // Returns false when a cluster would end up empty (the step is then not used).
+// Per-worker lists that keep their capacity from one step to the next.
+struct StepScratch {
+  std::vector<std::vector<uint64_t>> marks;   // kept faces, a bit set per worker
+  std::vector<std::vector<uint32_t>> border;  // faces next to a worker's clusters, in cluster order
+};
+
 bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const std::vector<uint32_t>& labels,
                   const ClusterGraph& graph, const std::vector<float>& generators, WorkerPool& pool,
-                  std::vector<uint32_t>& out) {
+                  std::vector<uint32_t>& out, ClusterGraph& out_graph, std::vector<int64_t>& delta,
+                  StepScratch& scratch) {
   const uint32_t nf = problem.face_count, nc = problem.clusters;
   const float* point = problem.point.data();
   const uint32_t* adjacent = topology.face_adjacent.data();
@@ -68,6 +78,8 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
   const std::vector<uint32_t>& offsets = graph.offsets;
   const std::vector<uint32_t>& neighbours = graph.neighbours;
   const std::vector<uint32_t>& count = graph.count;
+  const unsigned workers = pool.size();
+  const size_t width = size_t(nc) * kSumComponents;
 
   // A face closer to its own generator than half the distance to the nearest adjacent generator
   // cannot be closer to another (triangle inequality): most faces need one distance. The bound is
@@ -83,14 +95,17 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
   }
 
   // Each worker also keeps, per cluster, its face closest to the generator (the new seed), merged
-  // below by (distance, face id): the same seeds for any thread count.
-  const unsigned workers = pool.size();
+  // below by (distance, face id): the same seeds for any thread count; and adds up the centroid
+  // variations of its faces that change cluster (integers: any split gives the same sums).
   std::vector<float> worker_distance(size_t(workers) * nc, 0.0f);
   std::vector<uint32_t> worker_seed(size_t(workers) * nc, kNone);
+  std::vector<int64_t> worker_delta(size_t(workers) * width, 0);
   out.resize(nf);
   pool.run(nf, [&](size_t begin, size_t end, unsigned w) {
     float* seed_distance = &worker_distance[size_t(w) * nc];
     uint32_t* seed_face = &worker_seed[size_t(w) * nc];
+    int64_t* my_delta = &worker_delta[size_t(w) * width];
+    int64_t v[kSumComponents];
     for (size_t f = begin; f < end; ++f) {
       uint32_t own = labels[f], best = own;
       float best_d = distance(uint32_t(f), own);
@@ -105,12 +120,24 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
         }
       }
       out[f] = best;
+      if (best != own) {
+        problem.face_fixed(uint32_t(f), v);
+        for (int k = 0; k < kSumComponents; ++k) {
+          my_delta[size_t(own) * kSumComponents + k] -= v[k];
+          my_delta[size_t(best) * kSumComponents + k] += v[k];
+        }
+      }
       if (seed_face[best] == kNone || best_d < seed_distance[best]) {  // faces in increasing id
         seed_face[best] = uint32_t(f);
         seed_distance[best] = best_d;
       }
     }
   });
+  delta.assign(width, 0);
+  for (unsigned w = 0; w < workers; ++w)
+    for (size_t i = 0; i < width; ++i) delta[i] += worker_delta[size_t(w) * width + i];
+  std::vector<int64_t>().swap(worker_delta);
+  bool delta_exact = true;  // false once labels change other than through the orphans below
   std::vector<uint32_t> seed(nc, kNone);
   for (uint32_t c = 0; c < nc; ++c) {
     float seed_d = 0;
@@ -147,6 +174,7 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
     seed = closest_faces(out);
     for (uint32_t c = 0; c < nc; ++c)
       if (seed[c] == kNone) return false;  // a forced face was another cluster's only one
+    delta_exact = false;
   }
 
   // Keep each cluster's piece around its seed; the rest become orphans. One cluster at a time, so
@@ -156,76 +184,160 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
   // faces of different clusters share cache lines wherever the face order is not spatial, and a
   // shared array of marks written by every worker made two threads no faster than one (bunny00).
   // A face is walked only by its own cluster's walk, so the union of the sets is the kept faces.
+  // The walk also lists, per cluster, the faces of other clusters next to its kept faces (their
+  // final clusters, known once the orphans are placed, are its neighbours) and whether it
+  // reaches a boundary.
   const size_t words = (size_t(nf) + 63) / 64;
-  std::vector<std::vector<uint64_t>> worker_marks(workers);
+  std::vector<std::vector<uint64_t>>& worker_marks = scratch.marks;
+  std::vector<std::vector<uint32_t>>& worker_border = scratch.border;
+  worker_marks.resize(workers);
+  worker_border.resize(workers);
+  std::vector<uint32_t> border_begin(nc), border_count(nc);   // cluster c's part of its worker's list
+  std::vector<uint32_t> cluster_worker(nc, 0);                // the worker that walked c
   std::vector<size_t> worker_kept(workers, 0);
+  out_graph.open.assign(nc, 0);
   pool.run(nc, [&](size_t begin, size_t end, unsigned w) {
     thread_local std::vector<uint32_t> walk;
     std::vector<uint64_t>& marks = worker_marks[w];
+    std::vector<uint32_t>& border = worker_border[w];
     marks.assign(words, 0);
+    border.clear();
     auto mark = [&](uint32_t f) { marks[f >> 6] |= uint64_t(1) << (f & 63); };
     auto marked = [&](uint32_t f) { return (marks[f >> 6] >> (f & 63) & 1) != 0; };
     for (size_t c = begin; c < end; ++c) {
       walk.clear();
+      border_begin[c] = uint32_t(border.size());
+      uint8_t open = 0;
       mark(seed[c]);
       walk.push_back(seed[c]);
       for (size_t head = 0; head < walk.size(); ++head) {
         uint32_t f = walk[head];
         for (int e = 0; e < 3; ++e) {
           uint32_t g = adjacent[3 * size_t(f) + e];
-          if (g != kNone && out[g] == c && !marked(g)) {
+          if (g == kNone) {
+            open = 1;
+          } else if (out[g] != c) {
+            border.push_back(g);
+          } else if (!marked(g)) {  // only faces of c: no other walk writes them
             mark(g);
             walk.push_back(g);
           }
         }
       }
+      border_count[c] = uint32_t(border.size()) - border_begin[c];
+      cluster_worker[c] = w;
+      out_graph.open[c] = open;
       worker_kept[w] += walk.size();
     }
   }, /*min_parallel=*/2);  // a cluster is a walk over its faces: worth a thread from two on
   size_t kept_count = 0;
   for (size_t k : worker_kept) kept_count += k;
-  if (kept_count == nf) return true;
-  std::vector<uint64_t> kept_bits;  // union of the workers' marks (a worker without clusters has none)
-  for (std::vector<uint64_t>& marks : worker_marks) {
-    if (marks.empty()) continue;
-    if (kept_bits.empty()) {
-      kept_bits.swap(marks);
-      continue;
+
+  // Orphans (faces outside every kept piece): breadth-first from the kept faces next to them, in
+  // face order. Those are found from the orphans (face_adjacent is symmetric), a few percent of
+  // the faces, rather than by looking around every kept face.
+  std::vector<uint32_t> orphans, orphan_assigned;
+  if (kept_count < nf) {
+    std::vector<uint64_t> kept_bits;  // union of the workers' marks (a worker without clusters has none)
+    for (unsigned w = 0; w < workers; ++w) {
+      const std::vector<uint64_t>& marks = worker_marks[w];
+      if (marks.size() != words) continue;  // a worker without clusters this step
+      if (kept_bits.empty()) kept_bits.assign(words, 0);
+      for (size_t i = 0; i < words; ++i) kept_bits[i] |= marks[i];
     }
-    for (size_t i = 0; i < words; ++i) kept_bits[i] |= marks[i];
-  }
-  auto is_kept = [&](uint32_t f) { return (kept_bits[f >> 6] >> (f & 63) & 1) != 0; };
-  auto keep = [&](uint32_t f) { kept_bits[f >> 6] |= uint64_t(1) << (f & 63); };
-  // Orphans: breadth-first from the kept faces next to them, in face order. Those are found from
-  // the orphans (face_adjacent is symmetric), a few percent of the faces, rather than by looking
-  // around every kept face.
-  std::vector<uint32_t> orphans, queue;
-  for (size_t i = 0; i < words; ++i) {
-    uint64_t missing = ~kept_bits[i];
-    if (i == words - 1 && nf % 64) missing &= (uint64_t(1) << (nf % 64)) - 1;  // past the last face
-    for (; missing; missing &= missing - 1) orphans.push_back(uint32_t(i * 64 + std::countr_zero(missing)));
-  }
-  for (uint32_t g : orphans)
-    for (int e = 0; e < 3; ++e) {
-      uint32_t f = adjacent[3 * size_t(g) + e];
-      if (f != kNone && is_kept(f)) queue.push_back(f);
+    auto is_kept = [&](uint32_t f) { return (kept_bits[f >> 6] >> (f & 63) & 1) != 0; };
+    auto keep = [&](uint32_t f) { kept_bits[f >> 6] |= uint64_t(1) << (f & 63); };
+    for (size_t i = 0; i < words; ++i) {
+      uint64_t missing = ~kept_bits[i];
+      if (i == words - 1 && nf % 64) missing &= (uint64_t(1) << (nf % 64)) - 1;  // past the last face
+      for (; missing; missing &= missing - 1) orphans.push_back(uint32_t(i * 64 + std::countr_zero(missing)));
     }
-  std::sort(queue.begin(), queue.end());
-  queue.erase(std::unique(queue.begin(), queue.end()), queue.end());
-  for (size_t head = 0; head < queue.size(); ++head) {
-    uint32_t f = queue[head];
-    for (int e = 0; e < 3; ++e) {
-      uint32_t g = adjacent[3 * size_t(f) + e];
-      if (g != kNone && !is_kept(g)) {
-        keep(g);
-        out[g] = out[f];
-        queue.push_back(g);
+    orphan_assigned.resize(orphans.size());
+    for (size_t i = 0; i < orphans.size(); ++i) orphan_assigned[i] = out[orphans[i]];
+    std::vector<uint32_t> queue;
+    for (uint32_t g : orphans)
+      for (int e = 0; e < 3; ++e) {
+        uint32_t f = adjacent[3 * size_t(g) + e];
+        if (f != kNone && is_kept(f)) queue.push_back(f);
+      }
+    std::sort(queue.begin(), queue.end());
+    queue.erase(std::unique(queue.begin(), queue.end()), queue.end());
+    for (size_t head = 0; head < queue.size(); ++head) {
+      uint32_t f = queue[head];
+      for (int e = 0; e < 3; ++e) {
+        uint32_t g = adjacent[3 * size_t(f) + e];
+        if (g != kNone && !is_kept(g)) {
+          keep(g);
+          out[g] = out[f];
+          queue.push_back(g);
+        }
+      }
+    }
+    // Faces not reachable through manifold edges from any kept face keep their old label.
+    for (uint32_t f : orphans)
+      if (!is_kept(f)) out[f] = labels[f];
+  }
+  for (std::vector<uint64_t>& marks : worker_marks) marks.clear();  // (capacity kept)
+
+  // The sums: the assignment's variations, corrected for the orphans that moved on.
+  if (delta_exact) {
+    int64_t v[kSumComponents];
+    for (size_t i = 0; i < orphans.size(); ++i) {
+      const uint32_t f = orphans[i], from = orphan_assigned[i], to = out[f];
+      if (from == to) continue;
+      problem.face_fixed(f, v);
+      for (int k = 0; k < kSumComponents; ++k) {
+        delta[size_t(from) * kSumComponents + k] -= v[k];
+        delta[size_t(to) * kSumComponents + k] += v[k];
+      }
+    }
+  } else {  // recounted from the labels (rare: a cluster had to be given a face)
+    delta.assign(width, 0);
+    int64_t v[kSumComponents];
+    for (uint32_t f = 0; f < nf; ++f) {
+      if (out[f] == labels[f]) continue;
+      problem.face_fixed(f, v);
+      for (int k = 0; k < kSumComponents; ++k) {
+        delta[size_t(labels[f]) * kSumComponents + k] -= v[k];
+        delta[size_t(out[f]) * kSumComponents + k] += v[k];
       }
     }
   }
-  // Faces not reachable through manifold edges from any kept face keep their old label.
+
+  // The graph of the new labels. A kept face's neighbours are in its walk's list; an orphan gives
+  // its pairs both ways (its neighbours' lists missed it, or saw its assigned cluster).
+  std::vector<std::pair<uint32_t, uint32_t>> extra;  // (cluster, neighbour)
   for (uint32_t f : orphans)
-    if (!is_kept(f)) out[f] = labels[f];
+    for (int e = 0; e < 3; ++e) {
+      uint32_t g = adjacent[3 * size_t(f) + e];
+      if (g == kNone) {
+        out_graph.open[out[f]] = 1;
+      } else if (out[g] != out[f]) {
+        extra.emplace_back(out[f], out[g]);
+        extra.emplace_back(out[g], out[f]);
+      }
+    }
+  std::sort(extra.begin(), extra.end());
+  std::vector<uint32_t> extra_begin(size_t(nc) + 1, 0);
+  for (const auto& pair : extra) ++extra_begin[pair.first + 1];
+  for (uint32_t c = 0; c < nc; ++c) extra_begin[c + 1] += extra_begin[c];
+  out_graph.offsets.assign(size_t(nc) + 1, 0);
+  for (uint32_t c = 0; c < nc; ++c)
+    out_graph.offsets[c + 1] = out_graph.offsets[c] + border_count[c] + (extra_begin[c + 1] - extra_begin[c]);
+  out_graph.neighbours.resize(out_graph.offsets[nc]);
+  out_graph.count.assign(nc, 0);
+  pool.run(nc, [&](size_t begin, size_t end, unsigned) {
+    for (size_t c = begin; c < end; ++c) {
+      uint32_t* list = &out_graph.neighbours[out_graph.offsets[c]];
+      uint32_t n = 0;
+      const uint32_t* border = worker_border[cluster_worker[c]].data() + border_begin[c];
+      for (uint32_t i = 0; i < border_count[c]; ++i)
+        if (out[border[i]] != c) list[n++] = out[border[i]];
+      for (uint32_t i = extra_begin[c]; i < extra_begin[c + 1]; ++i) list[n++] = extra[i].second;
+      std::sort(list, list + n);
+      out_graph.count[c] = uint32_t(std::unique(list, list + n) - list);
+    }
+  }, /*min_parallel=*/64);
   return true;
 }
 
@@ -242,7 +354,8 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
   const size_t enclosed = enclosed_clusters(graph).size();
   std::vector<uint32_t> next;
   std::vector<float> previous = generators, guide(generators.size());
-  std::vector<int64_t> next_sums, worker_delta;
+  std::vector<int64_t> next_sums, delta;
+  StepScratch scratch;
   std::vector<float> next_generators;
   double momentum = kLloydMomentum, next_energy = 0;
   uint32_t kept = 0;
@@ -254,29 +367,10 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
     // topology-preserving iteration until repair dissolves it. The graph of the new labels is
     // also the next step's list of candidate clusters.
     auto try_step = [&] {
-      if (!voronoi_step(problem, topology, labels, graph, guide, pool, next)) return false;
-      build_cluster_graph(topology, next, problem.clusters, next_graph, &pool);
+      if (!voronoi_step(problem, topology, labels, graph, guide, pool, next, next_graph, delta, scratch)) return false;
       if (enclosed_clusters(next_graph).size() > enclosed) return false;
-      // Sums by the centroid variations of the faces that changed cluster (eq. 8), as the
-      // iteration does: exact integers, and far fewer faces than a recount.
-      // Each worker adds up its faces' variations; integer sums, so any split gives the same.
-      const size_t width = size_t(problem.clusters) * kSumComponents;
-      worker_delta.assign(size_t(pool.size()) * width, 0);
-      pool.run(problem.face_count, [&](size_t begin, size_t end, unsigned w) {
-        int64_t* delta = &worker_delta[size_t(w) * width];
-        int64_t v[kSumComponents];
-        for (size_t f = begin; f < end; ++f) {
-          if (next[f] == labels[f]) continue;
-          problem.face_fixed(uint32_t(f), v);
-          for (int k = 0; k < kSumComponents; ++k) {
-            delta[size_t(labels[f]) * kSumComponents + k] -= v[k];
-            delta[size_t(next[f]) * kSumComponents + k] += v[k];
-          }
-        }
-      });
       next_sums = sums;
-      for (unsigned w = 0; w < pool.size(); ++w)
-        for (size_t i = 0; i < width; ++i) next_sums[i] += worker_delta[size_t(w) * width + i];
+      for (size_t i = 0; i < sums.size(); ++i) next_sums[i] += delta[i];
       next_generators = generators_of(problem, next_sums);
       next_energy = total_energy(problem, next_sums, next_generators);
       return next_energy < energy;
