@@ -50,6 +50,12 @@ std::vector<float> generators_of(const ClusterProblem& problem, const std::vecto
   return g;
 }
 
+// Per-worker lists of voronoi_step that keep their capacity from one step to the next.
+struct StepScratch {
+  std::vector<std::vector<uint64_t>> marks;   // kept faces, a bit set per worker
+  std::vector<std::vector<uint32_t>> border;  // faces next to a worker's clusters, in cluster order
+};
+
 // One Lloyd step from `generators`, writing the new labels to `out`:
 //  1. every face takes the closest generator among its cluster and the clusters adjacent to it
 //     (a generator moves by less than a cluster's width per step, so the closest one is nearly
@@ -61,12 +67,6 @@ std::vector<float> generators_of(const ClusterProblem& problem, const std::vecto
 // their cluster graph (`out_graph`, as build_cluster_graph would make it) and the change of the
 // cluster sums (`delta`, clusters x kSumComponents, eq. 8's centroid variations).
 // Returns false when a cluster would end up empty (the step is then not used).
-// Per-worker lists that keep their capacity from one step to the next.
-struct StepScratch {
-  std::vector<std::vector<uint64_t>> marks;   // kept faces, a bit set per worker
-  std::vector<std::vector<uint32_t>> border;  // faces next to a worker's clusters, in cluster order
-};
-
 bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const std::vector<uint32_t>& labels,
                   const ClusterGraph& graph, const std::vector<float>& generators, WorkerPool& pool,
                   std::vector<uint32_t>& out, ClusterGraph& out_graph, std::vector<int64_t>& delta,
@@ -104,7 +104,7 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
   pool.run(nf, [&](size_t begin, size_t end, unsigned w) {
     float* seed_distance = &worker_distance[size_t(w) * nc];
     uint32_t* seed_face = &worker_seed[size_t(w) * nc];
-    int64_t* my_delta = &worker_delta[size_t(w) * width];
+    int64_t* my_delta = worker_delta.data() + size_t(w) * width;
     int64_t v[kSumComponents];
     for (size_t f = begin; f < end; ++f) {
       uint32_t own = labels[f], best = own;
@@ -328,7 +328,7 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
   out_graph.count.assign(nc, 0);
   pool.run(nc, [&](size_t begin, size_t end, unsigned) {
     for (size_t c = begin; c < end; ++c) {
-      uint32_t* list = &out_graph.neighbours[out_graph.offsets[c]];
+      uint32_t* list = out_graph.neighbours.data() + out_graph.offsets[c];  // (data(): the lists may all be empty)
       uint32_t n = 0;
       const uint32_t* border = worker_border[cluster_worker[c]].data() + border_begin[c];
       for (uint32_t i = 0; i < border_count[c]; ++i)
@@ -338,6 +338,18 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
       out_graph.count[c] = uint32_t(std::unique(list, list + n) - list);
     }
   }, /*min_parallel=*/64);
+#ifndef NDEBUG
+  {  // the graph and the sums' change are those of the new labels, as if computed from scratch
+    ClusterGraph check;
+    build_cluster_graph(topology, out, nc, check);
+    assert(check.open == out_graph.open && check.count == out_graph.count);
+    for (uint32_t c = 0; c < nc; ++c)
+      assert(std::equal(check.neighbours.data() + check.offsets[c], check.neighbours.data() + check.offsets[c] + check.count[c],
+                        out_graph.neighbours.data() + out_graph.offsets[c]));
+    std::vector<int64_t> before = compute_cluster_sums(problem, labels, nc), after = compute_cluster_sums(problem, out, nc);
+    for (size_t i = 0; i < width; ++i) assert(after[i] - before[i] == delta[i]);
+  }
+#endif
   return true;
 }
 

@@ -122,7 +122,7 @@ std::vector<int64_t> compute_cluster_sums(const ClusterProblem& problem, const s
   }
   std::vector<int64_t> partial(size_t(workers - 1) * width, 0);
   pool->run(problem.face_count, [&](size_t begin, size_t end, unsigned w) {
-    add_range(begin, end, w == 0 ? sums.data() : &partial[size_t(w - 1) * width]);
+    add_range(begin, end, w == 0 ? sums.data() : partial.data() + size_t(w - 1) * width);
   });
   for (unsigned w = 1; w < workers; ++w)
     for (size_t i = 0; i < width; ++i) sums[i] += partial[size_t(w - 1) * width + i];
