@@ -937,7 +937,8 @@ std::vector<uint32_t> Mesher::crossing_splits(uint32_t region, const std::vector
   // The chords in polygon order (both start at the loop's first anchor), with their split vertex.
   std::vector<Chord> chords;
   loop_chords(region_loop_[region], chords);
-  assert(chords.size() == m);
+  // Anchors added earlier in this pass (another region's split on a shared border) are not in
+  // `polygon` yet: nothing to split from it then; the round is redone with the new anchors.
   if (chords.size() != m) return splits;
   std::vector<double> deviation(m);
   std::vector<uint32_t> split(m);
