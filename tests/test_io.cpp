@@ -277,6 +277,32 @@ TEST_CASE("io: OFF variants COFF, NOFF, STCNOFF, nOFF and polygons on a one-line
   CHECK(face(polygons, 4) == std::vector<uint32_t>{1, 6, 4});
 }
 
+TEST_CASE("io: OFF comments glued to values, lines of blanks and indented comments") {
+  TempDir dir;
+  const Mesh mesh = meshcvt::read_mesh(dir.write("a.off",
+                                                 "OFF#glued to the keyword\n"
+                                                 "4 2 0\n"
+                                                 " \t \n"
+                                                 "0 0 0\n"
+                                                 "   # indented comment\n"
+                                                 "1 0 0#glued to a coordinate\n"
+                                                 "1 1 0\t\n"
+                                                 "0 1 0 #\n"
+                                                 "\t\n"
+                                                 "3 0 1 2#glued to an index\n"
+                                                 "3 0 2 3\r\n"
+                                                 "  \t# last\n"));
+  REQUIRE(mesh.vertex_count() == 4);
+  REQUIRE(mesh.face_count() == 2);
+  CHECK(vertex(mesh, 1) == std::vector<float>{1, 0, 0});
+  CHECK(face(mesh, 0) == std::vector<uint32_t>{0, 1, 2});
+  CHECK(face(mesh, 1) == std::vector<uint32_t>{0, 2, 3});
+  // A comment cuts a token: "1#2" is the number 1, so the line then lacks a value.
+  const FileError e = read_error(dir.write("b.off", "OFF\n3 1 0\n0 0 0\n1#0 0\n0 1 0\n3 0 1 2\n"),
+                                 FileError::Where::line, 4);
+  CHECK(contains(e.reason(), "1 values, needs 3"));
+}
+
 TEST_CASE("io: OFF malformed input names the line") {
   TempDir dir;
   const auto line = FileError::Where::line;
