@@ -1392,7 +1392,7 @@ class PartitionRefiner {
     std::vector<float> generators = it_.generators();
     generators.resize(3 * size_t(grown), 0.0f);
     restore_cluster_count(problem_, topology_, generators, labels, grown);
-    restart(std::move(labels));
+    restart(std::move(labels), /*same_count=*/false);
   }
 
   // Up to `attempts` teleports, stopping at the first that does not lower the distortion or when no
@@ -1479,8 +1479,12 @@ class PartitionRefiner {
     std::fill(&g[3 * size_t(drop)], &g[3 * size_t(drop)] + 3, 0.0f);
     return g;
   }
-  void restart(std::vector<uint32_t> labels) {
-    it_.reset(std::move(labels));
+  // Iterates again from `labels`. With the cluster count unchanged (teleports) the engine goes on
+  // from its converged state, the changed faces taken as moves (BoundaryIteration::relabel: the
+  // same decisions as a reset, testing only what the change can affect); a new count needs a reset.
+  void restart(std::vector<uint32_t> labels, bool same_count = true) {
+    if (same_count) it_.relabel(labels);
+    else it_.reset(std::move(labels));
     out_.history.push_back(IterationRecord{it_.energy(), 0, 0, round_});
     round_ = converge(it_, problem_, topology_, o_, round_, out_);
   }

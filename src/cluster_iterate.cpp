@@ -489,6 +489,49 @@ bool move_keeps_disks(const Mesh& mesh, const Topology& topology, const std::vec
 }
 
 // A face of the vertex ring of `face` moved in the last iteration (its disk tests may differ now).
+void BoundaryIteration::relabel(const std::vector<uint32_t>& labels) {
+  const uint32_t nf = problem_.face_count;
+  assert(labels.size() == nf && destination_.size() == nf);  // reset() ran, step memory is there
+  int64_t v[kSumComponents];
+  auto mark_changed = [&](uint32_t c) {
+    if (!cluster_changed_[c]) {
+      cluster_changed_[c] = 1;
+      changed_clusters_.push_back(c);
+    }
+  };
+  // The apply phase of step() for these moves (the moves of the last iteration, as far as the
+  // refusal cache and the watches can tell).
+  for (uint32_t f = 0; f < nf; ++f) {
+    const uint32_t from = labels_[f], to = labels[f];
+    if (from == to) continue;
+    assert(to < problem_.clusters);
+    destination_[f] = kNone;
+    proposal_state_[f] = kNoProposal;
+    problem_.face_fixed(f, v);
+    for (int c = 0; c < kSumComponents; ++c) {
+      sums_[size_t(from) * kSumComponents + c] -= v[c];
+      sums_[size_t(to) * kSumComponents + c] += v[c];
+    }
+    mark_changed(from);
+    mark_changed(to);
+    labels_[f] = to;
+    if (mode_ == TopologyMode::preserving)
+      for (int j = 0; j < 3; ++j) vertex_moved_at_[mesh_.indices[3 * size_t(f) + j]] = iteration_;
+    dirty_faces_.push_back(f);
+    for (int e = 0; e < 3; ++e) {
+      uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
+      if (o != kNone) dirty_faces_.push_back(o);
+    }
+  }
+  for (uint32_t c : changed_clusters_) {
+    float* g = &generators_[3 * size_t(c)];
+    const float old[3] = {g[0], g[1], g[2]};
+    compute_generator(problem_, &sums_[size_t(c) * kSumComponents], g);
+    double dx = double(g[0]) - old[0], dy = double(g[1]) - old[1], dz = double(g[2]) - old[2];
+    movement_[c] += std::sqrt(dx * dx + dy * dy + dz * dz);
+  }
+}
+
 bool BoundaryIteration::ring_moved_last_iteration(uint32_t face) const {
   const uint32_t* v = &mesh_.indices[3 * size_t(face)];
   const uint32_t last = iteration_ - 1;
