@@ -116,6 +116,68 @@ TEST_CASE("margin accelerator: identical labels, moves and energies to testing e
         }
 }
 
+// Going on from a converged engine with other labels (teleports) must take the decisions a reset
+// to those labels takes: the faces that differ are handled as the last iteration's moves, and only
+// what they can affect is tested next.
+TEST_CASE("relabel: the same iterations as a reset to the new labels, fewer faces tested") {
+  Mesh m = scanned_elephant();
+  Topology t = build_topology(m);
+  for (Metric metric : {Metric::cvt, Metric::l21})
+    for (TopologyMode mode : {TopologyMode::preserving, TopologyMode::paper}) {
+      CAPTURE(std::string(to_string(metric)));
+      CAPTURE(std::string(to_string(mode)));
+      const uint32_t n = 60;
+      ClusterOptions o = options_for(metric, n);
+      ClusterProblem problem = make_cluster_problem(m, o);
+      WorkerPool pool(2);
+      BoundaryIteration converged(problem, m, t, mode, true, pool);
+      converged.reset(initial_clustering(problem, m, t, Init::hierarchical, n, 1));
+      for (int i = 0; i < 1000 && converged.step().moves > 0; ++i) {
+      }
+      // A teleport-like change: cluster 1 merged into its neighbour, cluster 1 re-seeded as the
+      // faces of cluster 2 nearest its first face (breadth-first, a third of them).
+      std::vector<uint32_t> changed = converged.labels();
+      uint32_t other = kNone;
+      for (uint32_t f = 0; f < changed.size() && other == kNone; ++f)
+        if (changed[f] == 1)
+          for (int e = 0; e < 3; ++e) {
+            uint32_t g = t.face_adjacent[3 * size_t(f) + e];
+            if (g != kNone && changed[g] != 1) other = changed[g];
+          }
+      REQUIRE(other != kNone);
+      uint32_t donor = other == 2 ? 3 : 2;
+      for (uint32_t& l : changed)
+        if (l == 1) l = other;
+      std::vector<uint32_t> queue;
+      uint32_t size = 0;
+      for (uint32_t l : changed) size += l == donor;
+      for (uint32_t f = 0; f < changed.size() && queue.empty(); ++f)
+        if (changed[f] == donor) queue.push_back(f), changed[f] = 1;
+      for (size_t head = 0; head < queue.size() && queue.size() < size / 3; ++head)
+        for (int e = 0; e < 3; ++e) {
+          uint32_t g = t.face_adjacent[3 * size_t(queue[head]) + e];
+          if (g != kNone && changed[g] == donor && queue.size() < size / 3) changed[g] = 1, queue.push_back(g);
+        }
+
+      BoundaryIteration fresh(problem, m, t, mode, true, pool);
+      fresh.reset(changed);
+      converged.relabel(changed);
+      CHECK(converged.sums() == fresh.sums());
+      CHECK(converged.energy() == fresh.energy());
+      uint64_t tested_fresh = 0, tested_relabeled = 0;
+      for (int i = 0; i < 1000; ++i) {
+        IterationRecord a = fresh.step(), b = converged.step();
+        REQUIRE(a.moves == b.moves);
+        CHECK(a.energy == b.energy);
+        tested_fresh += a.evaluated_faces;
+        tested_relabeled += b.evaluated_faces;
+        if (a.moves == 0) break;
+      }
+      CHECK(converged.labels() == fresh.labels());
+      CHECK(tested_relabeled < tested_fresh);
+    }
+}
+
 // Restoring n after repair splits a cluster in two. On a protrusion (the elephant's tusks and
 // trunk) the cluster to split can be a cap with a band around it; halves grown from its tip and
 // its far rim gave back a cap enclosed by a band, dissolved again by the next repair, until the
