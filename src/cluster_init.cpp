@@ -82,12 +82,6 @@ struct DualGraph {
   uint32_t nodes = 0;
 
   double node_weight(uint32_t i) const { return faces.problem ? faces.weight(i) : weight[i]; }
-  // Pointer to node i's dims sums: stored, or computed into `scratch`.
-  const double* node_sum(uint32_t i, double* scratch) const {
-    if (!faces.problem) return &sum[dims * size_t(i)];
-    faces.sum(i, dims, scratch);
-    return scratch;
-  }
   // Mean point(s) S / W of node i (weight w > 0) into out[dims].
   void node_mean(uint32_t i, double w, double* out) const {
     if (faces.problem) return faces.mean(i, dims, out);
@@ -185,7 +179,7 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool& 
   }
 
   // The matching's scratch is dead from here on; freed now, it does not add to the peak of the
-  // edge rebuild below (17 bytes per face on the first round).
+  // edge rebuild below (21 bytes per face on the first round).
   std::vector<float>().swap(cost);
   std::vector<uint32_t>().swap(open_edges);
   std::vector<uint64_t>().swap(best);
