@@ -177,6 +177,12 @@ class BoundaryIteration final : public IterationEngine {
     uint32_t face, stamp;
   };
   void register_watches();
+  // Moves face f to cluster `to` (apply phase of step(), shared with relabel): sums by its
+  // centroid variation, labels, the two clusters marked changed, its vertices stamped, its
+  // proposal cleared. The changed clusters' generators are then updated by update_generators().
+  void apply_move(uint32_t f, uint32_t to);
+  void mark_dirty_around(uint32_t f);  // f and its neighbours: labels they read changed
+  void update_generators();            // generators of changed_clusters_, and their movement
   void purge_watches();
   std::vector<double> movement_;                  // per cluster: total distance its generator moved
   std::vector<std::vector<Watch>> watches_;       // per cluster and budget level

@@ -489,40 +489,37 @@ bool move_keeps_disks(const Mesh& mesh, const Topology& topology, const std::vec
 }
 
 // A face of the vertex ring of `face` moved in the last iteration (its disk tests may differ now).
-void BoundaryIteration::relabel(const std::vector<uint32_t>& labels) {
-  const uint32_t nf = problem_.face_count;
-  assert(labels.size() == nf && destination_.size() == nf);  // reset() ran, step memory is there
+void BoundaryIteration::apply_move(uint32_t f, uint32_t to) {
+  const uint32_t from = labels_[f];
+  destination_[f] = kNone;
+  proposal_state_[f] = kNoProposal;
   int64_t v[kSumComponents];
-  auto mark_changed = [&](uint32_t c) {
+  problem_.face_fixed(f, v);
+  int64_t* s_from = &sums_[size_t(from) * kSumComponents];
+  int64_t* s_to = &sums_[size_t(to) * kSumComponents];
+  for (int c = 0; c < kSumComponents; ++c) {
+    s_from[c] -= v[c];
+    s_to[c] += v[c];
+  }
+  for (uint32_t c : {from, to})
     if (!cluster_changed_[c]) {
       cluster_changed_[c] = 1;
       changed_clusters_.push_back(c);
     }
-  };
-  // The apply phase of step() for these moves (the moves of the last iteration, as far as the
-  // refusal cache and the watches can tell).
-  for (uint32_t f = 0; f < nf; ++f) {
-    const uint32_t from = labels_[f], to = labels[f];
-    if (from == to) continue;
-    assert(to < problem_.clusters);
-    destination_[f] = kNone;
-    proposal_state_[f] = kNoProposal;
-    problem_.face_fixed(f, v);
-    for (int c = 0; c < kSumComponents; ++c) {
-      sums_[size_t(from) * kSumComponents + c] -= v[c];
-      sums_[size_t(to) * kSumComponents + c] += v[c];
-    }
-    mark_changed(from);
-    mark_changed(to);
-    labels_[f] = to;
-    if (mode_ == TopologyMode::preserving)
-      for (int j = 0; j < 3; ++j) vertex_moved_at_[mesh_.indices[3 * size_t(f) + j]] = iteration_;
-    dirty_faces_.push_back(f);
-    for (int e = 0; e < 3; ++e) {
-      uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
-      if (o != kNone) dirty_faces_.push_back(o);
-    }
+  labels_[f] = to;
+  if (mode_ == TopologyMode::preserving)
+    for (int j = 0; j < 3; ++j) vertex_moved_at_[mesh_.indices[3 * size_t(f) + j]] = iteration_;
+}
+
+void BoundaryIteration::mark_dirty_around(uint32_t f) {
+  dirty_faces_.push_back(f);
+  for (int e = 0; e < 3; ++e) {
+    uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
+    if (o != kNone) dirty_faces_.push_back(o);
   }
+}
+
+void BoundaryIteration::update_generators() {
   for (uint32_t c : changed_clusters_) {
     float* g = &generators_[3 * size_t(c)];
     const float old[3] = {g[0], g[1], g[2]};
@@ -530,6 +527,20 @@ void BoundaryIteration::relabel(const std::vector<uint32_t>& labels) {
     double dx = double(g[0]) - old[0], dy = double(g[1]) - old[1], dz = double(g[2]) - old[2];
     movement_[c] += std::sqrt(dx * dx + dy * dy + dz * dz);
   }
+}
+
+void BoundaryIteration::relabel(const std::vector<uint32_t>& labels) {
+  const uint32_t nf = problem_.face_count;
+  assert(labels.size() == nf && destination_.size() == nf);  // reset() ran, step memory is there
+  // The apply phase of step() for these moves (the moves of the last iteration, as far as the
+  // refusal cache and the watches can tell).
+  for (uint32_t f = 0; f < nf; ++f) {
+    if (labels[f] == labels_[f]) continue;
+    assert(labels[f] < problem_.clusters);
+    apply_move(f, labels[f]);
+    mark_dirty_around(f);
+  }
+  update_generators();
 }
 
 bool BoundaryIteration::ring_moved_last_iteration(uint32_t face) const {
@@ -611,18 +622,10 @@ IterationRecord BoundaryIteration::step() {
   for (uint32_t c : changed_clusters_) cluster_changed_[c] = 0;
   changed_clusters_.clear();
   dirty_faces_.clear();
-  int64_t v[kSumComponents];
   std::vector<uint32_t> moved;
   moved.reserve(proposals.size());
-  auto mark_changed = [&](uint32_t c) {
-    if (!cluster_changed_[c]) {
-      cluster_changed_[c] = 1;
-      changed_clusters_.push_back(c);
-    }
-  };
   for (size_t i = 0; i < proposals.size(); ++i) {
     uint32_t f = proposals[i];
-    uint32_t to = destination_[f];
     if (!accepted[i]) {
       dirty_faces_.push_back(f);  // refused: the rule still wants it to move, so test it again
       if (mode_ == TopologyMode::preserving && proposal_state_[f] != kPassedDiskTests) {
@@ -634,41 +637,12 @@ IterationRecord BoundaryIteration::step() {
       }
       continue;
     }
-    destination_[f] = kNone;
-    proposal_state_[f] = kNoProposal;
-    uint32_t from = labels_[f];
     moved.push_back(f);
-    problem_.face_fixed(f, v);
-    int64_t* s_from = &sums_[size_t(from) * kSumComponents];
-    int64_t* s_to = &sums_[size_t(to) * kSumComponents];
-    for (int c = 0; c < kSumComponents; ++c) {
-      s_from[c] -= v[c];
-      s_to[c] += v[c];
-    }
-    mark_changed(from);
-    mark_changed(to);
-    labels_[f] = to;
-    if (mode_ == TopologyMode::preserving)
-      for (int j = 0; j < 3; ++j) vertex_moved_at_[mesh_.indices[3 * size_t(f) + j]] = iteration_;
+    apply_move(f, destination_[f]);
   }
   record.moves = moved.size();
-
-  // Moved faces and their neighbours: labels they read changed.
-  auto touch = [&](uint32_t f) { dirty_faces_.push_back(f); };
-  for (uint32_t f : moved) {
-    touch(f);
-    for (int e = 0; e < 3; ++e) {
-      uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
-      if (o != kNone) touch(o);
-    }
-  }
-  for (uint32_t c : changed_clusters_) {
-    float* g = &generators_[3 * size_t(c)];
-    const float old[3] = {g[0], g[1], g[2]};
-    compute_generator(problem_, &sums_[size_t(c) * kSumComponents], g);
-    double dx = double(g[0]) - old[0], dy = double(g[1]) - old[1], dz = double(g[2]) - old[2];
-    movement_[c] += std::sqrt(dx * dx + dy * dy + dz * dz);
-  }
+  for (uint32_t f : moved) mark_dirty_around(f);
+  update_generators();
   record.energy = energy();
   return record;
 }
