@@ -213,6 +213,23 @@ std::vector<float> place_projected(const Mesh& mesh, uint32_t clusters, const st
     double corner[3][3];
     for (int j = 0; j < 3; ++j)
       for (int d = 0; d < 3; ++d) corner[j][d] = vertex(mesh, mesh.indices[3 * size_t(f) + j])[d];
+    const double* target = &centroids[3 * size_t(c)];
+    if (best_distance[c] >= 0) {
+      // A face whose bounding sphere (about its centroid) stays farther than the best point so far
+      // cannot be closer: skipped without the point-triangle test (most faces of a cluster, once
+      // one near its centroid has been seen). The bound is shrunk far beyond rounding, so a face
+      // at the same distance is still tested and ties still go to the lower face id.
+      double mid[3], radius2 = 0, gap2 = 0;
+      for (int d = 0; d < 3; ++d) mid[d] = (corner[0][d] + corner[1][d] + corner[2][d]) / 3;
+      for (int j = 0; j < 3; ++j) {
+        double r2 = 0;
+        for (int d = 0; d < 3; ++d) r2 += (corner[j][d] - mid[d]) * (corner[j][d] - mid[d]);
+        radius2 = std::max(radius2, r2);
+      }
+      for (int d = 0; d < 3; ++d) gap2 += (target[d] - mid[d]) * (target[d] - mid[d]);
+      const double gap = std::sqrt(gap2) - std::sqrt(radius2);
+      if (gap > 0 && gap * gap * (1 - 1e-9) > best_distance[c]) continue;
+    }
     double point[3];
     double d2 = closest_point_on_triangle(&centroids[3 * size_t(c)], corner[0], corner[1], corner[2], point);
     if (best_distance[c] < 0 || d2 < best_distance[c]) {  // ties: the lower face id
