@@ -182,7 +182,7 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
     it.release_step_memory();  // reset() below re-creates it when another round follows
     std::vector<uint32_t> current = it.labels();
     std::vector<float> generators = it.generators();
-    bool repaired = repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair);
+    bool repaired = repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair, &pool);
     uint32_t restored = restore_cluster_count(problem, topology, generators, current, problem.clusters,
                                               cluster_component.empty() ? nullptr : &cluster_component);
     out.repair.restored_clusters += restored;

@@ -210,9 +210,11 @@ bool run_iterations(IterationEngine& it, uint32_t max_iterations,
 
 /// Connectivity repair of Section 5.3 (split clusters keep their largest piece, the other pieces go
 /// to the closest adjacent cluster; clusters enclosed by a single other cluster are dissolved).
-/// Returns true when anything changed. Clusters may be left empty.
+/// Returns true when anything changed. Clusters may be left empty. pool (optional): threads for
+/// the check that comes first and usually finds nothing to do; the result does not depend on it.
 bool repair_connectivity(const ClusterProblem& problem, const Topology& topology, const std::vector<float>& generators,
-                         std::vector<uint32_t>& labels, uint32_t clusters, RepairStats& stats);
+                         std::vector<uint32_t>& labels, uint32_t clusters, RepairStats& stats,
+                         WorkerPool* pool = nullptr);
 
 /// Re-creates empty clusters by splitting the clusters of highest energy in two connected halves.
 /// cluster_component (optional, `clusters` entries): the mesh component each cluster belongs to;

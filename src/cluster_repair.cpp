@@ -18,6 +18,7 @@
 
 #include "boundary_rule.h"
 #include "cluster_engine.h"
+#include "parallel.h"
 
 namespace meshcvt {
 
@@ -53,17 +54,54 @@ std::vector<uint32_t> cluster_pieces(const Topology& topology, const std::vector
 
 // Isolated clusters (see enclosed_clusters).
 std::vector<uint32_t> isolated_clusters(const Topology& topology, const std::vector<uint32_t>& labels,
-                                        uint32_t clusters) {
+                                        uint32_t clusters, WorkerPool* pool = nullptr) {
   ClusterGraph graph;
-  build_cluster_graph(topology, labels, clusters, graph);
+  build_cluster_graph(topology, labels, clusters, graph, pool);
   return enclosed_clusters(graph);
+}
+
+// Whether every non-empty cluster is one edge-connected piece: a walk from each cluster's lowest
+// face must reach all of its faces. Clusters are walked in parallel, each worker marking the faces
+// it reaches in a bit set of its own (a face is reached only by its own cluster's walk).
+bool all_clusters_connected(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t clusters,
+                            WorkerPool& pool) {
+  const uint32_t nf = uint32_t(labels.size());
+  std::vector<uint32_t> first(clusters, kNone), size(clusters, 0);
+  for (uint32_t f = 0; f < nf; ++f) {
+    if (first[labels[f]] == kNone) first[labels[f]] = f;
+    ++size[labels[f]];
+  }
+  std::vector<uint8_t> whole(clusters, 1);
+  pool.run(clusters, [&](size_t begin, size_t end, unsigned) {
+    std::vector<uint64_t> marks((size_t(nf) + 63) / 64, 0);
+    std::vector<uint32_t> walk;
+    for (size_t c = begin; c < end; ++c) {
+      if (first[c] == kNone) continue;
+      walk.assign(1, first[c]);
+      marks[first[c] >> 6] |= uint64_t(1) << (first[c] & 63);
+      for (size_t head = 0; head < walk.size(); ++head)
+        for (int e = 0; e < 3; ++e) {
+          uint32_t g = topology.face_adjacent[3 * size_t(walk[head]) + e];
+          if (g == kNone || labels[g] != c || (marks[g >> 6] >> (g & 63) & 1)) continue;
+          marks[g >> 6] |= uint64_t(1) << (g & 63);
+          walk.push_back(g);
+        }
+      whole[c] = walk.size() == size[c];
+    }
+  }, /*min_parallel=*/2);
+  return std::all_of(whole.begin(), whole.end(), [](uint8_t w) { return w != 0; });
 }
 
 }  // namespace
 
 bool repair_connectivity(const ClusterProblem& problem, const Topology& topology, const std::vector<float>& generators,
-                         std::vector<uint32_t>& labels, uint32_t clusters, RepairStats& stats) {
+                         std::vector<uint32_t>& labels, uint32_t clusters, RepairStats& stats, WorkerPool* pool) {
   const uint32_t nf = problem.face_count;
+  // The usual case after a run (the topology-preserving step keeps clusters connected): nothing
+  // split, nothing enclosed, nothing to do; checked in parallel before the serial work below.
+  if (pool && all_clusters_connected(topology, labels, clusters, *pool) &&
+      isolated_clusters(topology, labels, clusters, pool).empty())
+    return false;
   std::vector<uint32_t> piece = cluster_pieces(topology, labels);
 
   // Largest piece of every cluster, by weight, ties to the lower piece id.
