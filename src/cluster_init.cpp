@@ -25,10 +25,13 @@
 // so each component gets exactly its count.
 #include <algorithm>
 #include <cassert>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <new>
 #include <numeric>
 #include <string>
+#include <type_traits>
 
 #include "cluster_engine.h"
 #include "meshcvt/error.h"
@@ -40,6 +43,67 @@ namespace {
 
 struct DualEdge {
   uint32_t a, b;  // a < b, node ids of the current level
+};
+
+// A plain array that gives memory back when it shrinks. The graph's arrays only ever shrink from
+// one round to the next; std::vector can only shrink by copying (shrink_to_fit: old and new both
+// live, the peak of the whole initialization on big meshes) or not at all (resize: the pages of the
+// unused tail stay resident). realloc to a smaller size trims in place: mremap for the large,
+// mmap-backed blocks, a split chunk otherwise.
+template <class T>
+class ShrinkingArray {
+  static_assert(std::is_trivially_copyable_v<T>);
+
+ public:
+  ShrinkingArray() = default;
+  ShrinkingArray(const ShrinkingArray&) = delete;
+  ShrinkingArray& operator=(const ShrinkingArray&) = delete;
+  ~ShrinkingArray() { std::free(data_); }
+
+  // n elements of `value` (the old contents are dropped).
+  void assign(size_t n, T value) {
+    reset(n);
+    std::fill(data_, data_ + n, value);
+  }
+  // n elements left uninitialized (the old contents are dropped).
+  void reset(size_t n) {
+    std::free(data_);
+    data_ = nullptr;
+    size_ = 0;
+    if (n == 0) return;
+    data_ = static_cast<T*>(std::malloc(n * sizeof(T)));
+    if (!data_) throw std::bad_alloc();
+    size_ = n;
+  }
+  // Keeps the first n <= size() elements and releases the rest.
+  void shrink(size_t n) {
+    assert(n <= size_);
+    if (n == size_) return;
+    if (n == 0) {
+      std::free(data_);
+      data_ = nullptr;
+    } else if (T* p = static_cast<T*>(std::realloc(data_, n * sizeof(T)))) {
+      data_ = p;
+    }  // (a failed shrink keeps the larger block, still valid)
+    size_ = n;
+  }
+
+  size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  T* begin() { return data_; }
+  T* end() { return data_ + size_; }
+  T& operator[](size_t i) {
+    assert(i < size_);
+    return data_[i];
+  }
+  const T& operator[](size_t i) const {
+    assert(i < size_);
+    return data_[i];
+  }
+
+ private:
+  T* data_ = nullptr;
+  size_t size_ = 0;
 };
 
 // The faces as the nodes of the first level: their weight and sums computed when asked, so that
@@ -74,11 +138,11 @@ struct FaceNodes {
 };
 
 struct DualGraph {
-  std::vector<double> weight;  // per node (empty while `faces` supplies the nodes)
-  std::vector<double> sum;     // dims per node: sum of w p (then, for l21, sum of w * centroid)
+  ShrinkingArray<double> weight;  // per node (empty while `faces` supplies the nodes)
+  ShrinkingArray<double> sum;     // dims per node: sum of w p (then, for l21, sum of w * centroid)
   int dims = 3;
-  FaceNodes faces;             // the first level: nodes are faces
-  std::vector<DualEdge> edges; // may hold duplicates (several mesh edges between two clusters)
+  FaceNodes faces;                 // the first level: nodes are faces
+  ShrinkingArray<DualEdge> edges;  // may hold duplicates (several mesh edges between two clusters)
   uint32_t nodes = 0;
 
   double node_weight(uint32_t i) const { return faces.problem ? faces.weight(i) : weight[i]; }
@@ -148,26 +212,48 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool& 
   // several without recomputing them.
   std::vector<uint64_t> best(g.nodes);
   std::vector<uint8_t> matched(g.nodes, 0);
-  std::vector<uint32_t> chosen, open_edges(ne);
-  for (uint32_t e = 0; e < ne; ++e) open_edges[e] = e;
-  for (int pass = 0; pass < 8 && chosen.size() < wanted && !open_edges.empty(); ++pass) {
+  std::vector<uint32_t> chosen;
+  // The edges still open (both ends unmatched) from the second pass on; the first pass takes every
+  // edge without listing them, and the list made after it holds only the survivors (4 bytes per
+  // edge less at the peak of the initialization).
+  std::vector<uint32_t> open_edges;
+  auto consider = [&](uint32_t e) {
+    const DualEdge edge = g.edges[e];
+    const uint64_t k = key(e);
+    best[edge.a] = std::min(best[edge.a], k);
+    best[edge.b] = std::min(best[edge.b], k);
+  };
+  auto pick = [&](uint32_t e) {
+    const DualEdge edge = g.edges[e];
+    const uint64_t k = key(e);
+    if (best[edge.a] == k && best[edge.b] == k) chosen.push_back(e);
+  };
+  auto is_open = [&](uint32_t e) { return !matched[g.edges[e].a] && !matched[g.edges[e].b]; };
+  for (int pass = 0; pass < 8 && chosen.size() < wanted; ++pass) {
     std::fill(best.begin(), best.end(), UINT64_MAX);
-    size_t kept = 0;
-    for (uint32_t e : open_edges) {
-      const DualEdge edge = g.edges[e];
-      if (matched[edge.a] || matched[edge.b]) continue;
-      open_edges[kept++] = e;
-      const uint64_t k = key(e);
-      best[edge.a] = std::min(best[edge.a], k);
-      best[edge.b] = std::min(best[edge.b], k);
+    if (pass == 0) {
+      for (uint32_t e = 0; e < ne; ++e) consider(e);
+    } else {
+      if (pass == 1) {
+        size_t count = 0;
+        for (uint32_t e = 0; e < ne; ++e) count += is_open(e);
+        open_edges.reserve(count);
+        for (uint32_t e = 0; e < ne; ++e)
+          if (is_open(e)) open_edges.push_back(e);
+      } else {
+        size_t kept = 0;
+        for (uint32_t e : open_edges)
+          if (is_open(e)) open_edges[kept++] = e;
+        open_edges.resize(kept);
+      }
+      if (open_edges.empty()) break;
+      for (uint32_t e : open_edges) consider(e);
     }
-    open_edges.resize(kept);
     const size_t before = chosen.size();
-    for (uint32_t e : open_edges) {
-      const DualEdge edge = g.edges[e];
-      const uint64_t k = key(e);
-      if (best[edge.a] == k && best[edge.b] == k) chosen.push_back(e);
-    }
+    if (pass == 0)
+      for (uint32_t e = 0; e < ne; ++e) pick(e);
+    else
+      for (uint32_t e : open_edges) pick(e);
     if (chosen.size() == before) break;
     for (size_t i = before; i < chosen.size(); ++i) matched[g.edges[chosen[i]].a] = matched[g.edges[chosen[i]].b] = 1;
   }
@@ -191,6 +277,7 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool& 
   // number, one below it an id already given (ids never exceed the node that got them).
   std::vector<uint32_t> relabel(g.nodes, kNone);
   for (uint32_t e : chosen) relabel[g.edges[e].a] = g.edges[e].b;
+  std::vector<uint32_t>().swap(chosen);
   uint32_t next = 0;
   for (uint32_t node = 0; node < g.nodes; ++node) {
     const uint32_t held = relabel[node];
@@ -227,10 +314,8 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool& 
       }
     }
     g.faces = FaceNodes{};
-    g.weight.resize(next);
-    g.sum.resize(dims * size_t(next));
-    g.weight.shrink_to_fit();
-    g.sum.shrink_to_fit();
+    g.weight.shrink(next);
+    g.sum.shrink(dims * size_t(next));
   }
   // New edges without self-loops and without repeats (several mesh edges between two merged
   // clusters), so edge lists shrink with the node count: a counting sort by the lower end, then a
@@ -261,7 +346,7 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool& 
     std::sort(g.edges.begin() + run_start, g.edges.begin() + kept,
               [](const DualEdge& x, const DualEdge& y) { return x.b < y.b; });
   }
-  g.edges.resize(kept);
+  g.edges.shrink(kept);
   g.nodes = next;
   return relabel;
 }
@@ -284,19 +369,24 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
   g.nodes = nf;
   g.dims = problem.metric == Metric::l21 ? 6 : 3;
   g.faces = FaceNodes{&problem, &mesh, subset};
-  g.edges.reserve(size_t(nf) * 3 / 2);
+  // At most 3 per face (1.5 on a closed manifold mesh): the unused tail is given back below, and
+  // its pages were never touched.
+  g.edges.reset(3 * size_t(nf));
+  size_t edge_count = 0;
   for (uint32_t f = 0; f < nf; ++f) {
-    const size_t run_start = g.edges.size();
+    const size_t run_start = edge_count;
     for (int e = 0; e < 3; ++e) {
       uint32_t o = topology.face_adjacent[3 * size_t(face_of(f)) + e];
       if (o == kNone) continue;
       if (subset) o = (*local_of)[o];  // a neighbour is in the same component, so in the subset
-      if (o > f) g.edges.push_back(DualEdge{f, o});
+      if (o > f) g.edges[edge_count++] = DualEdge{f, o};
     }
     // in increasing upper end, as every level's edges: an edge's index then ranks it among equal
     // costs as its end ids would (edge_key)
-    std::sort(g.edges.begin() + run_start, g.edges.end(), [](const DualEdge& x, const DualEdge& y) { return x.b < y.b; });
+    std::sort(g.edges.begin() + run_start, g.edges.begin() + edge_count,
+              [](const DualEdge& x, const DualEdge& y) { return x.b < y.b; });
   }
+  g.edges.shrink(edge_count);
 
   // Level targets: n·2^k, n·2^(k-1), ..., n with n·2^k < F <= n·2^(k+1).
   std::vector<uint32_t> targets;
@@ -309,6 +399,13 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
       if (g.edges.empty())
         throw OptionError("cannot make " + std::to_string(clusters) + " connected clusters: the face graph has more components");
       relabels.push_back(contract_round(g, g.nodes - target, pool));
+      // The big early relabelings are folded into the first one at once (one pass over the faces
+      // each) rather than kept to the end: 4 bytes per face less at the peak of the rounds.
+      // Sizes only fall, so the folded ones are always a prefix of the rounds.
+      if (relabels.size() == 2 && 2 * relabels[1].size() >= relabels[0].size()) {
+        for (uint32_t& id : relabels[0]) id = relabels[1][id];
+        relabels.pop_back();
+      }
     }
   }
   assert(g.nodes == clusters);
