@@ -91,7 +91,6 @@ class ShrinkingArray {
   size_t size() const { return size_; }
   bool empty() const { return size_ == 0; }
   T* begin() { return data_; }
-  T* end() { return data_ + size_; }
   T& operator[](size_t i) {
     assert(i < size_);
     return data_[i];
