@@ -22,6 +22,10 @@ class WorkerPool;
 /// accumulation, so results are the same for any thread count and on the GPU.
 inline constexpr int kSumComponents = 5;
 
+/// Budget levels of the margin accelerator (cluster_iterate.cpp): level L >= 1 holds budgets in
+/// [2^(L-32), 2^(L-31)), level 0 the smaller ones (normalized units).
+inline constexpr int kBudgetLevels = 32;
+
 /// Everything the iteration needs to know about the faces, in normalized coordinates: the mesh's
 /// bounding box is mapped into [0, 1]^3 (uniform scale), so float distances keep their precision
 /// and the fixed-point range is known in advance.
@@ -172,28 +176,44 @@ class BoundaryIteration final : public IterationEngine {
   // Margin accelerator (exact; see cluster_iterate.cpp): a face that decided to stay is re-tested
   // only once one of the generators it read has moved, in total, by its budget. Watches are kept
   // per cluster in buckets of budgets within a factor of 2; a bucket is flushed (all its faces
-  // re-tested) once its cluster moved by the bucket's lower bound since its last flush.
+  // re-tested) once its cluster moved by the bucket's lower bound since its last flush. Each worker
+  // keeps buckets of its own, filled by the faces it tested and flushed by it, so that registering
+  // and flushing run in parallel with no lock: a face's live watches are all in the buckets of the
+  // worker that last tested it. (Which worker holds a watch changes only when a face may be
+  // re-tested early, never late; decisions are the same for any thread count.)
   struct Watch {
     uint32_t face, stamp;
   };
-  void register_watches();
+  struct ClusterWatches {
+    std::vector<Watch> bucket[kBudgetLevels];  // per budget level
+    double flushed_at[kBudgetLevels];          // per level: the cluster's movement_ at its last flush
+  };
+  struct WatchBuckets {
+    // A worker's buckets for a cluster exist once it registers a watch there (a worker's faces
+    // are mostly a region of the mesh: each cluster's buckets exist in about one worker).
+    std::vector<uint32_t> slot;            // per cluster: its entry in `clusters`, or kNone
+    std::vector<ClusterWatches> clusters;
+    std::vector<uint32_t> level_mask;      // per cluster: bit L set when level L holds watches
+    size_t entries = 0;                    // watches in the buckets, stale ones included
+    int64_t live_change = 0;               // live watches added minus dropped, not yet summed
+  };
+  void register_watches(uint32_t f, WatchBuckets& watches);  // f was tested and stays
+  void flush_watches(WatchBuckets& watches);                  // collect_active_faces, one worker's part
+  void purge_watches(WatchBuckets& watches);
   // Moves face f to cluster `to` (apply phase of step(), shared with relabel): sums by its
   // centroid variation, labels, the two clusters marked changed, its vertices stamped, its
   // proposal cleared. The changed clusters' generators are then updated by update_generators().
   void apply_move(uint32_t f, uint32_t to);
   void mark_dirty_around(uint32_t f);  // f and its neighbours: labels they read changed
   void update_generators();            // generators of changed_clusters_, and their movement
-  void purge_watches();
+  void sum_live_watches();             // folds the workers' live_change into live_watches_
   std::vector<double> movement_;                  // per cluster: total distance its generator moved
-  std::vector<std::vector<Watch>> watches_;       // per cluster and budget level
-  std::vector<double> flushed_at_;                // per cluster and level: movement_ at its last flush
-  std::vector<uint32_t> level_mask_;              // per cluster: bit L set when level L holds watches
+  std::vector<WatchBuckets> worker_watches_;      // per worker
   std::vector<uint32_t> eval_stamp_;              // per face: iteration of its last test (0: none)
   std::vector<float> budget_;                     // per face: its budget from that test
   std::vector<uint8_t> watch_count_;              // per face: live watches of that test
-  std::vector<std::vector<uint32_t>> worker_stayed_;  // faces tested this iteration that stay
   uint32_t iteration_ = 0;
-  size_t watch_entries_ = 0, live_watches_ = 0;
+  size_t live_watches_ = 0;
 };
 
 /// The disk tests (a) and (b) of the topology-preserving filter: moving `face` from its cluster to

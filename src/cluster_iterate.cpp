@@ -36,7 +36,13 @@
 // bucket is re-tested whole, a little early for some faces, never late), so an iteration touches
 // only the faces that may be due, not every border face of every cluster that moved. Same
 // decisions as testing every border face every iteration (`accelerate = false`); the tests check.
+// Each worker registers the watches of the faces it tested in buckets of its own and flushes them
+// itself, so the bookkeeping runs on every thread: serial, it was a third of the iteration on the
+// 1.2M bunny with two threads. Which faces are re-tested early then depends on the split between
+// threads; the decisions do not.
 #include <algorithm>
+#include <atomic>
+#include <bit>
 #include <cassert>
 #include <cmath>
 #include <cstring>
@@ -174,8 +180,6 @@ bool ring_keeps_disks(const Topology& topology, const std::vector<uint32_t>& lab
   return mask_is_connected(adjacent, in_source) && mask_is_connected(adjacent, in_destination);
 }
 
-// Level L >= 1 holds budgets in [2^(L-32), 2^(L-31)), level 0 the smaller ones (normalized units).
-constexpr int kBudgetLevels = 32;
 
 // Relative error allowed on every float distance and weighted sum the rule compares: each is a few
 // roundings of 2^-24 away from its exact value, far below this.
@@ -262,16 +266,18 @@ void BoundaryIteration::reset(std::vector<uint32_t> labels) {
   worker_moves_.assign(pool_.size(), {});
   worker_rings_.assign(pool_.size(), {});
   worker_evaluated_.assign(pool_.size(), 0);
-  worker_stayed_.assign(pool_.size(), {});
   movement_.assign(nc, 0.0);
-  watches_.assign(accelerate_ ? size_t(nc) * kBudgetLevels : 0, {});
-  flushed_at_.assign(accelerate_ ? size_t(nc) * kBudgetLevels : 0, 0.0);
-  level_mask_.assign(accelerate_ ? nc : 0, 0);
+  worker_watches_.assign(accelerate_ ? pool_.size() : 0, {});
+  for (WatchBuckets& w : worker_watches_) {
+    w.slot.assign(nc, kNone);
+    w.clusters.reserve(nc);  // (pages untouched until used: no copies of the buckets as it grows)
+    w.level_mask.assign(nc, 0);
+  }
   eval_stamp_.assign(accelerate_ ? nf : 0, 0);
   budget_.assign(accelerate_ ? nf : 0, 0.0f);
   watch_count_.assign(accelerate_ ? nf : 0, 0);
   iteration_ = 0;
-  watch_entries_ = live_watches_ = 0;
+  live_watches_ = 0;
 }
 
 namespace {
@@ -284,55 +290,63 @@ int budget_level(float budget) {
 double level_threshold(int level) { return level == 0 ? 0.0 : std::ldexp(1.0, level - kBudgetLevels); }
 }  // namespace
 
-// The faces tested this iteration that stay get one watch per cluster they read (their own and
-// each neighbouring one), at that cluster's movement plus their budget.
-void BoundaryIteration::register_watches() {
-  for (auto& stayed : worker_stayed_) {
-    for (uint32_t f : stayed) {
-      live_watches_ -= watch_count_[f];  // the watches of its previous test are stale now
-      uint32_t clusters[4];
-      int count = 0;
-      clusters[count++] = labels_[f];
-      for (int e = 0; e < 3; ++e) {
-        uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
-        if (o == kNone) continue;
-        uint32_t q = labels_[o];
-        bool seen = false;
-        for (int k = 0; k < count; ++k) seen |= clusters[k] == q;
-        if (!seen) clusters[count++] = q;
-      }
-      const int level = budget_level(budget_[f]);
-      for (int k = 0; k < count; ++k) {
-        std::vector<Watch>& bucket = watches_[size_t(clusters[k]) * kBudgetLevels + level];
-        if (bucket.empty()) {
-          // An empty bucket's clock starts now: every face in it was registered since.
-          flushed_at_[size_t(clusters[k]) * kBudgetLevels + level] = movement_[clusters[k]];
-          level_mask_[clusters[k]] |= uint32_t(1) << level;
-        }
-        bucket.push_back(Watch{f, eval_stamp_[f]});
-      }
-      watch_count_[f] = uint8_t(count);
-      live_watches_ += size_t(count);
-      watch_entries_ += size_t(count);
-    }
-    stayed.clear();
+// A face tested this iteration that stays gets one watch per cluster it read (its own and each
+// neighbouring one), at that cluster's movement plus its budget, in the buckets of the worker
+// that tested it (labels and movements do not change while the faces are tested).
+void BoundaryIteration::register_watches(uint32_t f, WatchBuckets& watches) {
+  watches.live_change -= watch_count_[f];  // the watches of its previous test are stale now
+  uint32_t clusters[4];
+  int count = 0;
+  clusters[count++] = labels_[f];
+  for (int e = 0; e < 3; ++e) {
+    uint32_t o = topology_.face_adjacent[3 * size_t(f) + e];
+    if (o == kNone) continue;
+    uint32_t q = labels_[o];
+    bool seen = false;
+    for (int k = 0; k < count; ++k) seen |= clusters[k] == q;
+    if (!seen) clusters[count++] = q;
   }
-  if (watch_entries_ > 2 * live_watches_ + problem_.face_count / 8 + 1024) purge_watches();
+  const int level = budget_level(budget_[f]);
+  for (int k = 0; k < count; ++k) {
+    const uint32_t c = clusters[k];
+    if (watches.slot[c] == kNone) {
+      watches.slot[c] = uint32_t(watches.clusters.size());
+      watches.clusters.emplace_back();
+    }
+    ClusterWatches& cw = watches.clusters[watches.slot[c]];
+    std::vector<Watch>& bucket = cw.bucket[level];
+    if (bucket.empty()) {
+      // An empty bucket's clock starts now: every face in it was registered since.
+      cw.flushed_at[level] = movement_[c];
+      watches.level_mask[c] |= uint32_t(1) << level;
+    }
+    bucket.push_back(Watch{f, eval_stamp_[f]});
+  }
+  watch_count_[f] = uint8_t(count);
+  watches.live_change += count;
+  watches.entries += size_t(count);
+}
+
+void BoundaryIteration::sum_live_watches() {
+  for (WatchBuckets& w : worker_watches_) {
+    live_watches_ = size_t(int64_t(live_watches_) + w.live_change);
+    w.live_change = 0;
+  }
 }
 
 // Drops the watches of faces tested again since (they have newer ones or moved).
-void BoundaryIteration::purge_watches() {
-  watch_entries_ = 0;
-  for (std::vector<Watch>& bucket : watches_) {
-    bucket.erase(
-        std::remove_if(bucket.begin(), bucket.end(), [&](const Watch& w) { return eval_stamp_[w.face] != w.stamp; }),
-        bucket.end());
-    watch_entries_ += bucket.size();
-  }
+void BoundaryIteration::purge_watches(WatchBuckets& watches) {
+  watches.entries = 0;
   for (uint32_t c = 0; c < problem_.clusters; ++c)
-    for (uint32_t levels = level_mask_[c]; levels; levels &= levels - 1)
-      if (watches_[size_t(c) * kBudgetLevels + __builtin_ctz(levels)].empty())
-        level_mask_[c] &= ~(uint32_t(1) << __builtin_ctz(levels));
+    for (uint32_t levels = watches.level_mask[c]; levels; levels &= levels - 1) {
+      const int level = __builtin_ctz(levels);
+      std::vector<Watch>& bucket = watches.clusters[watches.slot[c]].bucket[level];
+      bucket.erase(
+          std::remove_if(bucket.begin(), bucket.end(), [&](const Watch& w) { return eval_stamp_[w.face] != w.stamp; }),
+          bucket.end());
+      watches.entries += bucket.size();
+      if (bucket.empty()) watches.level_mask[c] &= ~(uint32_t(1) << level);
+    }
 }
 
 void BoundaryIteration::release_step_memory() {
@@ -344,16 +358,13 @@ void BoundaryIteration::release_step_memory() {
   release(dirty_faces_);
   release(active_);
   release(active_bits_);
-  release(watches_);
-  release(flushed_at_);
-  release(level_mask_);
+  release(worker_watches_);
   release(eval_stamp_);
   release(budget_);
   release(watch_count_);
   release(movement_);
   for (auto& v : worker_moves_) release(v);
   for (auto& v : worker_rings_) release(v);
-  for (auto& v : worker_stayed_) release(v);
 }
 
 std::string BoundaryIteration::description() const {
@@ -385,15 +396,32 @@ bool BoundaryIteration::is_border(uint32_t f) const {
 void BoundaryIteration::collect_active_faces() {
   uint64_t* bits = active_bits_.data();
   auto add = [&](uint32_t f) { bits[f >> 6] |= uint64_t(1) << (f & 63); };
+  // In parallel over ranges of words: a count per range, then each range writes its part of the
+  // list (the same list as one pass would make).
+  const size_t words = active_bits_.size();
   auto list_marked = [&] {
-    active_.clear();
-    for (size_t word = 0; word < active_bits_.size(); ++word)
-      for (uint64_t w = bits[word]; w; w &= w - 1) active_.push_back(uint32_t(word * 64 + __builtin_ctzll(w)));
-    std::fill(active_bits_.begin(), active_bits_.end(), 0);
+    std::vector<size_t> range_start(pool_.size() + 1, 0);
+    pool_.run(words, [&](size_t begin, size_t end, unsigned w) {
+      size_t n = 0;
+      for (size_t word = begin; word < end; ++word) n += size_t(std::popcount(bits[word]));
+      range_start[w + 1] = n;
+    }, /*min_parallel=*/8192);
+    for (size_t w = 0; w < pool_.size(); ++w) range_start[w + 1] += range_start[w];
+    active_.resize(range_start.back());
+    pool_.run(words, [&](size_t begin, size_t end, unsigned w) {
+      uint32_t* out = active_.data() + range_start[w];
+      for (size_t word = begin; word < end; ++word) {
+        for (uint64_t b = bits[word]; b; b &= b - 1) *out++ = uint32_t(word * 64 + __builtin_ctzll(b));
+        bits[word] = 0;
+      }
+    }, /*min_parallel=*/8192);
   };
-  auto every_border_face = [&] {
-    for (uint32_t f = 0; f < problem_.face_count; ++f)
-      if (is_border(f)) add(f);
+  auto every_border_face = [&] {  // whole words per range: no two workers write one word
+    pool_.run(words, [&](size_t begin, size_t end, unsigned) {
+      const size_t last = std::min<size_t>(end * 64, problem_.face_count);
+      for (size_t f = begin * 64; f < last; ++f)
+        if (is_border(uint32_t(f))) add(uint32_t(f));
+    }, /*min_parallel=*/64);
   };
   if (!accelerate_ || iteration_ == 1) {  // iteration_ 1: the first after reset (no dirty face yet)
     every_border_face();
@@ -401,27 +429,40 @@ void BoundaryIteration::collect_active_faces() {
     return;
   }
   for (uint32_t f : dirty_faces_) add(f);
-  // Buckets whose cluster moved by their lower bound since their last flush: a face in the bucket
-  // was registered after that flush with a budget at least the bound, so none is re-tested late.
+  // Each worker flushes its own buckets; the faces go into the shared bit set (an atomic OR: the
+  // set is the same in any order).
+  pool_.run(worker_watches_.size(), [&](size_t begin, size_t end, unsigned) {
+    for (size_t w = begin; w < end; ++w) flush_watches(worker_watches_[w]);
+  }, /*min_parallel=*/2);
+  sum_live_watches();
+  list_marked();
+}
+
+// Buckets whose cluster moved by their lower bound since their last flush: a face in the bucket
+// was registered after that flush with a budget at least the bound, so none is re-tested late.
+void BoundaryIteration::flush_watches(WatchBuckets& watches) {
+  uint64_t* bits = active_bits_.data();
   for (uint32_t c : changed_clusters_) {
     const double moved = movement_[c];
-    for (uint32_t levels = level_mask_[c]; levels; levels &= levels - 1) {
+    if (watches.level_mask[c] == 0) continue;
+    ClusterWatches& cw = watches.clusters[watches.slot[c]];
+    for (uint32_t levels = watches.level_mask[c]; levels; levels &= levels - 1) {
       const int level = __builtin_ctz(levels);
-      const size_t slot = size_t(c) * kBudgetLevels + level;
-      std::vector<Watch>& bucket = watches_[slot];
-      if (!(moved - flushed_at_[slot] >= level_threshold(level)) || moved == flushed_at_[slot]) continue;
-      level_mask_[c] &= ~(uint32_t(1) << level);
-      watch_entries_ -= bucket.size();
+      std::vector<Watch>& bucket = cw.bucket[level];
+      if (!(moved - cw.flushed_at[level] >= level_threshold(level)) || moved == cw.flushed_at[level]) continue;
+      watches.level_mask[c] &= ~(uint32_t(1) << level);
+      watches.entries -= bucket.size();
       for (const Watch& w : bucket) {
         if (eval_stamp_[w.face] != w.stamp) continue;  // tested again since: stale
-        --live_watches_;
+        // Its live watches are all in these buckets (this worker tested it last): no other
+        // worker writes its count.
+        --watches.live_change;
         --watch_count_[w.face];
-        add(w.face);
+        std::atomic_ref<uint64_t>(bits[w.face >> 6]).fetch_or(uint64_t(1) << (w.face & 63), std::memory_order_relaxed);
       }
       bucket.clear();
     }
   }
-  list_marked();
 }
 
 void BoundaryIteration::evaluate_range(size_t begin, size_t end, unsigned worker) {
@@ -429,7 +470,6 @@ void BoundaryIteration::evaluate_range(size_t begin, size_t end, unsigned worker
   const float* weight = problem_.weight.data();
   const float* gen = generators_.data();
   std::vector<uint32_t>& moves = worker_moves_[worker];
-  std::vector<uint32_t>& stayed = worker_stayed_[worker];
   uint64_t evaluated = 0;
   for (size_t i = begin; i < end; ++i) {
     uint32_t f = active_[i];
@@ -475,7 +515,7 @@ void BoundaryIteration::evaluate_range(size_t begin, size_t end, unsigned worker
       float b = float(budget);
       if (double(b) > budget) b = std::nextafter(b, 0.0f);
       budget_[f] = b;
-      stayed.push_back(f);
+      register_watches(f, worker_watches_[worker]);
     }
   }
   worker_evaluated_[worker] += evaluated;
@@ -558,7 +598,15 @@ IterationRecord BoundaryIteration::step() {
   ++iteration_;
   collect_active_faces();
   pool_.run(active_.size(), [&](size_t b, size_t e, unsigned w) { evaluate_range(b, e, w); });
-  if (accelerate_) register_watches();
+  if (accelerate_) {
+    sum_live_watches();
+    size_t entries = 0;
+    for (const WatchBuckets& w : worker_watches_) entries += w.entries;
+    if (entries > 2 * live_watches_ + problem_.face_count / 8 + 1024)
+      pool_.run(worker_watches_.size(), [&](size_t begin, size_t end, unsigned) {
+        for (size_t w = begin; w < end; ++w) purge_watches(worker_watches_[w]);
+      }, /*min_parallel=*/2);
+  }
   std::vector<uint32_t> proposals;
   for (auto& m : worker_moves_) proposals.insert(proposals.end(), m.begin(), m.end());
   if (accelerate_)
