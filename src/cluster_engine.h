@@ -198,7 +198,7 @@ class BoundaryIteration final : public IterationEngine {
     int64_t live_change = 0;               // live watches added minus dropped, not yet summed
   };
   void register_watches(uint32_t f, WatchBuckets& watches);  // f was tested and stays
-  void flush_watches(WatchBuckets& watches);                  // collect_active_faces, one worker's part
+  void flush_watches(WatchBuckets& watches, bool concurrent);  // collect_active_faces, one worker's part
   void purge_watches(WatchBuckets& watches);
   // Moves face f to cluster `to` (apply phase of step(), shared with relabel): sums by its
   // centroid variation, labels, the two clusters marked changed, its vertices stamped, its

@@ -431,16 +431,18 @@ void BoundaryIteration::collect_active_faces() {
   for (uint32_t f : dirty_faces_) add(f);
   // Each worker flushes its own buckets; the faces go into the shared bit set (an atomic OR: the
   // set is the same in any order).
+  // (On one thread when few clusters moved: waking the others costs more than the flushes.)
+  const bool parallel = worker_watches_.size() > 1 && changed_clusters_.size() >= 256;
   pool_.run(worker_watches_.size(), [&](size_t begin, size_t end, unsigned) {
-    for (size_t w = begin; w < end; ++w) flush_watches(worker_watches_[w]);
-  }, /*min_parallel=*/2);
+    for (size_t w = begin; w < end; ++w) flush_watches(worker_watches_[w], parallel);
+  }, /*min_parallel=*/parallel ? 2 : worker_watches_.size() + 1);
   sum_live_watches();
   list_marked();
 }
 
 // Buckets whose cluster moved by their lower bound since their last flush: a face in the bucket
 // was registered after that flush with a budget at least the bound, so none is re-tested late.
-void BoundaryIteration::flush_watches(WatchBuckets& watches) {
+void BoundaryIteration::flush_watches(WatchBuckets& watches, bool concurrent) {
   uint64_t* bits = active_bits_.data();
   for (uint32_t c : changed_clusters_) {
     const double moved = movement_[c];
@@ -458,7 +460,11 @@ void BoundaryIteration::flush_watches(WatchBuckets& watches) {
         // worker writes its count.
         --watches.live_change;
         --watch_count_[w.face];
-        std::atomic_ref<uint64_t>(bits[w.face >> 6]).fetch_or(uint64_t(1) << (w.face & 63), std::memory_order_relaxed);
+        const uint64_t bit = uint64_t(1) << (w.face & 63);
+        if (concurrent)
+          std::atomic_ref<uint64_t>(bits[w.face >> 6]).fetch_or(bit, std::memory_order_relaxed);
+        else
+          bits[w.face >> 6] |= bit;
       }
       bucket.clear();
     }
