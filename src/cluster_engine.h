@@ -2,6 +2,8 @@
 // GPU driver (host/). Nothing here is public API.
 #pragma once
 
+#include <cassert>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -42,7 +44,27 @@ struct ClusterProblem {
   std::shared_ptr<TriangleBvh> bvh;          ///< ccvt only: closest points on the mesh
 
   /// The 5 fixed-point contributions of face k (deterministic function of point and weight).
-  void face_fixed(uint32_t k, int64_t out[kSumComponents]) const;
+  /// Inline: the Lloyd steps, the iteration and every sum over the faces call it per moved face.
+  void face_fixed(uint32_t k, int64_t out[kSumComponents]) const {
+    double w = double(weight[k]) * fixed_scale;
+    double px = point[3 * size_t(k)], py = point[3 * size_t(k) + 1], pz = point[3 * size_t(k) + 2];
+    out[0] = round_half_away(w);
+    out[1] = round_half_away(w * px);
+    out[2] = round_half_away(w * py);
+    out[3] = round_half_away(w * pz);
+    out[4] = round_half_away(w * ((px * px + py * py) + pz * pz));
+  }
+
+  /// std::llround (half away from zero) without the libm call and without branches (the fraction
+  /// is as likely above a half as below: branches on it mispredict half the time). Same result:
+  /// below 2^52 the fraction x - trunc(x) is exact in double, above it x is an integer;
+  /// |x| < 2^62 here (fixed_scale).
+  static int64_t round_half_away(double x) {
+    assert(std::fabs(x) < 0x1p62);
+    int64_t r = int64_t(x);  // toward zero
+    double fraction = x - double(r);
+    return r + int64_t(fraction >= 0.5) - int64_t(fraction <= -0.5);
+  }
 };
 
 /// Builds the per-face data. Throws OptionError for bad density arrays.

@@ -12,30 +12,6 @@
 
 namespace meshcvt {
 
-namespace {
-// std::llround (half away from zero), inline: the libm call was ~5% of a 1.2M-face run (Lloyd steps,
-// iteration and repair convert every moved face). Same result: below 2^52 the fraction
-// x - trunc(x) is exact in double, above it x is an integer; |x| < 2^62 here (fixed_scale).
-int64_t round_half_away(double x) {
-  assert(std::fabs(x) < 0x1p62);
-  int64_t r = int64_t(x);  // toward zero
-  double fraction = x - double(r);
-  if (fraction >= 0.5) ++r;
-  else if (fraction <= -0.5) --r;
-  return r;
-}
-}  // namespace
-
-void ClusterProblem::face_fixed(uint32_t k, int64_t out[kSumComponents]) const {
-  double w = double(weight[k]) * fixed_scale;
-  double px = point[3 * k], py = point[3 * k + 1], pz = point[3 * k + 2];
-  out[0] = round_half_away(w);
-  out[1] = round_half_away(w * px);
-  out[2] = round_half_away(w * py);
-  out[3] = round_half_away(w * pz);
-  out[4] = round_half_away(w * ((px * px + py * py) + pz * pz));
-}
-
 ClusterProblem make_cluster_problem(const Mesh& mesh, const ClusterOptions& options) {
   ClusterProblem pr;
   pr.metric = options.metric;
