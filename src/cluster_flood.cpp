@@ -202,33 +202,54 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
     std::vector<uint32_t>& border = worker_border[w];
     marks.assign(words, 0);
     border.clear();
-    auto mark = [&](uint32_t f) { marks[f >> 6] |= uint64_t(1) << (f & 63); };
-    auto marked = [&](uint32_t f) { return (marks[f >> 6] >> (f & 63) & 1) != 0; };
+    // Raw pointers and explicit growth in the hot loop: with push_back the compiler reloads every
+    // vector's data pointer after each (possibly allocating) call.
+    uint64_t* const mark_bits = marks.data();
+    const uint32_t* const label = out.data();
+    if (walk.size() < 1024) walk.resize(1024);
+    if (border.capacity() < 1024) border.reserve(1024);
+    border.resize(border.capacity());
+    uint32_t* queue = walk.data();
+    size_t queue_capacity = walk.size();
+    uint32_t* border_list = border.data();
+    size_t border_size = 0, border_capacity = border.size();
     for (size_t c = begin; c < end; ++c) {
-      walk.clear();
-      border_begin[c] = uint32_t(border.size());
+      border_begin[c] = uint32_t(border_size);
       uint8_t open = 0;
-      mark(seed[c]);
-      walk.push_back(seed[c]);
-      for (size_t head = 0; head < walk.size(); ++head) {
-        uint32_t f = walk[head];
+      const uint32_t first = seed[c];
+      mark_bits[first >> 6] |= uint64_t(1) << (first & 63);
+      queue[0] = first;
+      size_t tail = 1;
+      for (size_t head = 0; head < tail; ++head) {
+        const uint32_t f = queue[head];
+        if (tail + 3 > queue_capacity) {  // room for the three neighbours
+          walk.resize(2 * queue_capacity);
+          queue = walk.data();
+          queue_capacity = walk.size();
+        }
+        if (border_size + 3 > border_capacity) {
+          border.resize(2 * border_capacity);
+          border_list = border.data();
+          border_capacity = border.size();
+        }
         for (int e = 0; e < 3; ++e) {
-          uint32_t g = adjacent[3 * size_t(f) + e];
+          const uint32_t g = adjacent[3 * size_t(f) + e];
           if (g == kNone) {
             open = 1;
-          } else if (out[g] != c) {
-            border.push_back(g);
-          } else if (!marked(g)) {  // only faces of c: no other walk writes them
-            mark(g);
-            walk.push_back(g);
+          } else if (label[g] != c) {
+            border_list[border_size++] = g;
+          } else if (!(mark_bits[g >> 6] >> (g & 63) & 1)) {  // only faces of c: no other walk writes them
+            mark_bits[g >> 6] |= uint64_t(1) << (g & 63);
+            queue[tail++] = g;
           }
         }
       }
-      border_count[c] = uint32_t(border.size()) - border_begin[c];
+      border_count[c] = uint32_t(border_size) - border_begin[c];
       cluster_worker[c] = w;
       out_graph.open[c] = open;
-      worker_kept[w] += walk.size();
+      worker_kept[w] += tail;
     }
+    border.resize(border_size);
   }, /*min_parallel=*/2);  // a cluster is a walk over its faces: worth a thread from two on
   size_t kept_count = 0;
   for (size_t k : worker_kept) kept_count += k;
