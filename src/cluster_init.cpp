@@ -183,6 +183,22 @@ float contraction_cost(const DualGraph& g, uint32_t i, uint32_t j) {
   return float(wi * wj * d2 / (w * w));
 }
 
+// Sorts one node's run of edges by upper end. Runs are short (a node has about three neighbours):
+// an inline insertion sort, where a std::sort call per node cost more than the sorting. The upper
+// ends of a run are distinct, so the order is the same as any sort's.
+void sort_by_upper_end(DualEdge* first, DualEdge* last) {
+  if (last - first > 16) {
+    std::sort(first, last, [](const DualEdge& x, const DualEdge& y) { return x.b < y.b; });
+    return;
+  }
+  for (DualEdge* i = first + (first != last); i < last; ++i) {
+    const DualEdge e = *i;
+    DualEdge* j = i;
+    for (; j > first && (j - 1)->b > e.b; --j) *j = *(j - 1);
+    *j = e;
+  }
+}
+
 // An edge's place in a round's order: its cost's bits above its index. Costs are floats >= 0, whose
 // bits order like their values, so one integer comparison orders edges by cost and breaks ties by
 // index: every comparison has one answer, and a node's cheapest edge is a plain minimum.
@@ -211,7 +227,10 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool& 
   // several without recomputing them.
   std::vector<uint64_t> best(g.nodes);
   std::vector<uint8_t> matched(g.nodes, 0);
-  std::vector<uint32_t> chosen;
+  // A matching has at most nodes / 2 edges: written through a pointer, as push_back in the pick
+  // loop made the compiler reload the arrays the loop reads after every call.
+  std::vector<uint32_t> chosen(g.nodes / 2 + 1);
+  size_t chosen_count = 0;
   // The edges still open (both ends unmatched) from the second pass on; the first pass takes every
   // edge without listing them, and the list made after it holds only the survivors (4 bytes per
   // edge less at the peak of the initialization).
@@ -225,10 +244,10 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool& 
   auto pick = [&](uint32_t e) {
     const DualEdge edge = g.edges[e];
     const uint64_t k = key(e);
-    if (best[edge.a] == k && best[edge.b] == k) chosen.push_back(e);
+    if (best[edge.a] == k && best[edge.b] == k) chosen[chosen_count++] = e;
   };
   auto is_open = [&](uint32_t e) { return !matched[g.edges[e].a] && !matched[g.edges[e].b]; };
-  for (int pass = 0; pass < 8 && chosen.size() < wanted; ++pass) {
+  for (int pass = 0; pass < 8 && chosen_count < wanted; ++pass) {
     std::fill(best.begin(), best.end(), UINT64_MAX);
     if (pass == 0) {
       for (uint32_t e = 0; e < ne; ++e) consider(e);
@@ -248,14 +267,15 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool& 
       if (open_edges.empty()) break;
       for (uint32_t e : open_edges) consider(e);
     }
-    const size_t before = chosen.size();
+    const size_t before = chosen_count;
     if (pass == 0)
       for (uint32_t e = 0; e < ne; ++e) pick(e);
     else
       for (uint32_t e : open_edges) pick(e);
-    if (chosen.size() == before) break;
-    for (size_t i = before; i < chosen.size(); ++i) matched[g.edges[chosen[i]].a] = matched[g.edges[chosen[i]].b] = 1;
+    if (chosen_count == before) break;
+    for (size_t i = before; i < chosen_count; ++i) matched[g.edges[chosen[i]].a] = matched[g.edges[chosen[i]].b] = 1;
   }
+  chosen.resize(chosen_count);
   assert(!chosen.empty() || ne == 0);
   if (chosen.size() > wanted) {  // the cheapest `wanted` (keys are distinct; their order is not needed)
     std::nth_element(chosen.begin(), chosen.begin() + wanted, chosen.end(),
@@ -342,8 +362,7 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool& 
       g.edges[kept++] = DualEdge{a, b};
     }
     // in increasing upper end (see the first level in hierarchical_clustering)
-    std::sort(g.edges.begin() + run_start, g.edges.begin() + kept,
-              [](const DualEdge& x, const DualEdge& y) { return x.b < y.b; });
+    sort_by_upper_end(g.edges.begin() + run_start, g.edges.begin() + kept);
   }
   g.edges.shrink(kept);
   g.nodes = next;
@@ -382,8 +401,7 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
     }
     // in increasing upper end, as every level's edges: an edge's index then ranks it among equal
     // costs as its end ids would (edge_key)
-    std::sort(g.edges.begin() + run_start, g.edges.begin() + edge_count,
-              [](const DualEdge& x, const DualEdge& y) { return x.b < y.b; });
+    sort_by_upper_end(g.edges.begin() + run_start, g.edges.begin() + edge_count);
   }
   g.edges.shrink(edge_count);
 
