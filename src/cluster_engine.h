@@ -179,6 +179,7 @@ class BoundaryIteration final : public IterationEngine {
   std::vector<uint32_t> labels_;
   std::vector<int64_t> sums_;          // kSumComponents per cluster
   std::vector<float> generators_;      // 3 per cluster
+  std::vector<double> cluster_energy_;  // per cluster, kept with the generators (energy() sums them)
   std::vector<uint8_t> cluster_changed_;     // flag per cluster, set for those in changed_clusters_
   std::vector<uint32_t> changed_clusters_;   // clusters whose generator the last iteration changed
   std::vector<uint32_t> dirty_faces_;        // faces moved, next to a move, or refused last time

@@ -252,7 +252,11 @@ void BoundaryIteration::reset(std::vector<uint32_t> labels) {
   assert(labels_.size() == nf);
   sums_ = compute_cluster_sums(problem_, labels_, nc, &pool_);
   generators_.assign(3 * size_t(nc), 0.0f);
-  for (uint32_t c = 0; c < nc; ++c) compute_generator(problem_, &sums_[size_t(c) * kSumComponents], &generators_[3 * c]);
+  cluster_energy_.resize(nc);
+  for (uint32_t c = 0; c < nc; ++c) {
+    compute_generator(problem_, &sums_[size_t(c) * kSumComponents], &generators_[3 * c]);
+    cluster_energy_[c] = cluster_energy(problem_, &sums_[size_t(c) * kSumComponents], &generators_[3 * c]);
+  }
   destination_.assign(nf, kNone);
   proposal_state_.assign(nf, kNoProposal);
   disk_refused_.clear();
@@ -372,9 +376,8 @@ std::string BoundaryIteration::description() const {
 }
 
 double BoundaryIteration::energy() const {
-  double e = 0;
-  for (uint32_t c = 0; c < problem_.clusters; ++c)
-    e += cluster_energy(problem_, &sums_[size_t(c) * kSumComponents], &generators_[3 * size_t(c)]);
+  double e = 0;  // in cluster order, as a sum of cluster_energy() over all clusters would be
+  for (double ec : cluster_energy_) e += ec;
   return e;
 }
 
@@ -570,6 +573,7 @@ void BoundaryIteration::update_generators() {
     float* g = &generators_[3 * size_t(c)];
     const float old[3] = {g[0], g[1], g[2]};
     compute_generator(problem_, &sums_[size_t(c) * kSumComponents], g);
+    cluster_energy_[c] = cluster_energy(problem_, &sums_[size_t(c) * kSumComponents], g);
     double dx = double(g[0]) - old[0], dy = double(g[1]) - old[1], dz = double(g[2]) - old[2];
     movement_[c] += std::sqrt(dx * dx + dy * dy + dz * dz);
   }
