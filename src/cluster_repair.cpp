@@ -60,36 +60,81 @@ std::vector<uint32_t> isolated_clusters(const Topology& topology, const std::vec
   return enclosed_clusters(graph);
 }
 
-// Whether every non-empty cluster is one edge-connected piece: a walk from each cluster's lowest
-// face must reach all of its faces. Clusters are walked in parallel, each worker marking the faces
-// it reaches in a bit set of its own (a face is reached only by its own cluster's walk).
-bool all_clusters_connected(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t clusters,
-                            WorkerPool& pool) {
+// Whether nothing needs repairing: every non-empty cluster is one edge-connected piece (a walk
+// from its lowest face reaches all of its faces) and none is enclosed (enclosed_clusters: no mesh
+// boundary, one neighbouring cluster, which has two or more). Clusters are walked in parallel, each
+// worker marking the faces it reaches in a bit set of its own (a face is reached only by its own
+// cluster's walk); the walk also notes the clusters next to each, so no cluster graph is built.
+bool nothing_to_repair(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t clusters,
+                       WorkerPool& pool) {
   const uint32_t nf = uint32_t(labels.size());
+  const uint32_t* adjacent = topology.face_adjacent.data();
+  const uint32_t* label = labels.data();
+  // Each cluster's lowest face and size, per worker over its range of faces, then merged.
+  const unsigned workers = pool.size();
+  std::vector<uint32_t> worker_first(size_t(workers) * clusters, kNone), worker_size(size_t(workers) * clusters, 0);
+  pool.run(nf, [&](size_t begin, size_t end, unsigned w) {
+    uint32_t* first = &worker_first[size_t(w) * clusters];
+    uint32_t* size = &worker_size[size_t(w) * clusters];
+    for (size_t f = begin; f < end; ++f) {
+      if (first[label[f]] == kNone) first[label[f]] = uint32_t(f);
+      ++size[label[f]];
+    }
+  });
   std::vector<uint32_t> first(clusters, kNone), size(clusters, 0);
-  for (uint32_t f = 0; f < nf; ++f) {
-    if (first[labels[f]] == kNone) first[labels[f]] = f;
-    ++size[labels[f]];
-  }
-  std::vector<uint8_t> whole(clusters, 1);
+  for (unsigned w = 0; w < workers; ++w)  // ranges in increasing face order: the first found is the lowest
+    for (uint32_t c = 0; c < clusters; ++c) {
+      if (first[c] == kNone) first[c] = worker_first[size_t(w) * clusters + c];
+      size[c] += worker_size[size_t(w) * clusters + c];
+    }
+  std::vector<uint32_t>().swap(worker_first);
+  std::vector<uint32_t>().swap(worker_size);
+
+  // Per cluster: whole, open (touches a mesh boundary), its first neighbouring cluster and whether
+  // it has a second one.
+  std::vector<uint8_t> whole(clusters, 1), open(clusters, 0), several(clusters, 0);
+  std::vector<uint32_t> neighbour(clusters, kNone);
   pool.run(clusters, [&](size_t begin, size_t end, unsigned) {
     std::vector<uint64_t> marks((size_t(nf) + 63) / 64, 0);
+    uint64_t* mark_bits = marks.data();
+    // The walk holds at most the cluster's faces: sized once per cluster, written through a
+    // pointer (push_back made the compiler reload every array the loop reads after each call).
     std::vector<uint32_t> walk;
     for (size_t c = begin; c < end; ++c) {
       if (first[c] == kNone) continue;
-      walk.assign(1, first[c]);
-      marks[first[c] >> 6] |= uint64_t(1) << (first[c] & 63);
-      for (size_t head = 0; head < walk.size(); ++head)
+      if (walk.size() < size[c]) walk.resize(size[c]);
+      uint32_t* queue = walk.data();
+      queue[0] = first[c];
+      size_t tail = 1;
+      mark_bits[first[c] >> 6] |= uint64_t(1) << (first[c] & 63);
+      uint32_t next_to = kNone;
+      bool is_open = false, more = false;
+      for (size_t head = 0; head < tail; ++head) {
+        const uint32_t f = queue[head];
         for (int e = 0; e < 3; ++e) {
-          uint32_t g = topology.face_adjacent[3 * size_t(walk[head]) + e];
-          if (g == kNone || labels[g] != c || (marks[g >> 6] >> (g & 63) & 1)) continue;
-          marks[g >> 6] |= uint64_t(1) << (g & 63);
-          walk.push_back(g);
+          const uint32_t g = adjacent[3 * size_t(f) + e];
+          if (g == kNone) {
+            is_open = true;
+          } else if (label[g] != c) {
+            if (next_to == kNone) next_to = label[g];
+            else more |= label[g] != next_to;
+          } else if (!(mark_bits[g >> 6] >> (g & 63) & 1)) {
+            mark_bits[g >> 6] |= uint64_t(1) << (g & 63);
+            queue[tail++] = g;  // a face of c, each once: tail <= size[c]
+          }
         }
-      whole[c] = walk.size() == size[c];
+      }
+      whole[c] = tail == size[c];
+      open[c] = is_open;
+      neighbour[c] = next_to;
+      several[c] = more;
     }
   }, /*min_parallel=*/2);
-  return std::all_of(whole.begin(), whole.end(), [](uint8_t w) { return w != 0; });
+  for (uint32_t c = 0; c < clusters; ++c) {
+    if (!whole[c]) return false;
+    if (!open[c] && neighbour[c] != kNone && !several[c] && several[neighbour[c]]) return false;  // enclosed
+  }
+  return true;
 }
 
 }  // namespace
@@ -99,9 +144,7 @@ bool repair_connectivity(const ClusterProblem& problem, const Topology& topology
   const uint32_t nf = problem.face_count;
   // The usual case after a run (the topology-preserving step keeps clusters connected): nothing
   // split, nothing enclosed, nothing to do; checked in parallel before the serial work below.
-  if (pool && all_clusters_connected(topology, labels, clusters, *pool) &&
-      isolated_clusters(topology, labels, clusters, pool).empty())
-    return false;
+  if (pool && nothing_to_repair(topology, labels, clusters, *pool)) return false;
   std::vector<uint32_t> piece = cluster_pieces(topology, labels);
 
   // Largest piece of every cluster, by weight, ties to the lower piece id.
