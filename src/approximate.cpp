@@ -61,6 +61,7 @@
 // directions), no two chords join the same anchors, and diagonals are never shared, so every output
 // edge has two triangles; around an anchor the regions are disks meeting once each.
 #include <algorithm>
+#include <bit>
 #include <cassert>
 #include <chrono>
 #include <cmath>
@@ -440,9 +441,6 @@ class Mesher {
   std::vector<uint32_t> region_interior_offsets_, region_interior_;   // vertices on no border, CSR
   std::vector<uint8_t> on_border_;                                    // per vertex: on some loop
   std::vector<uint32_t> interior_region_;  // per vertex: its region when on no border, else kNone
-  // Edges into interior vertices (the only ones the Dijkstra relaxes), CSR per vertex, with lengths.
-  std::vector<uint32_t> edge_offsets_, edge_target_;
-  std::vector<double> edge_length_;
   std::vector<std::vector<uint32_t>> candidates_;  // per region: the coloring's triangles (input vertex ids)
   // Per region: the last direct triangulation and what it was made from, reused while they match.
   struct CachedTriangulation {
@@ -460,18 +458,22 @@ class Mesher {
   std::unordered_set<uint64_t> edges_;          // chord edges and accepted diagonals
   std::vector<uint32_t> color_;                 // per vertex: input vertex of its anchor (kNone: none yet)
   std::vector<double> distance_;
+
   std::vector<uint32_t> triangles_, triangle_regions_;
 };
 
 void Mesher::find_open_vertices() {
   open_.assign(nv_, 0);
+  // The mean edge length is ChordRule::cgal's unit alone: a square root per half-edge otherwise spent
+  // for nothing.
+  const bool measure = options_.chord_rule == ChordRule::cgal;
   double total = 0;
   uint64_t edges = 0;
   for (uint32_t f = 0; f < nf_; ++f) {
     if (geom_.collapsed[f]) continue;
     for (int e = 0; e < 3; ++e) {
       uint32_t a = mesh_.indices[3 * size_t(f) + e], b = mesh_.indices[3 * size_t(f) + (e + 1) % 3];
-      total += length(position(a) - position(b));
+      if (measure) total += length(position(a) - position(b));
       ++edges;
       if (topology_.face_adjacent[3 * size_t(f) + e] == kNone) open_[a] = open_[b] = 1;
     }
@@ -808,37 +810,6 @@ void Mesher::index_regions() {
   interior_region_.assign(nv_, kNone);
   for (uint32_t v = 0; v < nv_; ++v)
     if (!on_border_[v]) interior_region_[v] = vertex_region[v];
-  // Each edge appears once per face around it (twice inside the mesh): a repeated relaxation fails
-  // its test at once, cheaper than sorting the lists.
-  edge_offsets_.assign(size_t(nv_) + 1, 0);
-  for (uint32_t v = 0; v < nv_; ++v) {
-    uint32_t count = 0;
-    for (uint32_t i = topology_.vertex_face_offsets[v]; i < topology_.vertex_face_offsets[v + 1]; ++i) {
-      uint32_t f = topology_.vertex_faces[i];
-      if (geom_.collapsed[f]) continue;
-      for (int j = 0; j < 3; ++j) {
-        uint32_t u = mesh_.indices[3 * size_t(f) + j];
-        count += u != v && interior_region_[u] != kNone;
-      }
-    }
-    edge_offsets_[v + 1] = edge_offsets_[v] + count;
-  }
-  edge_target_.resize(edge_offsets_.back());
-  edge_length_.resize(edge_offsets_.back());
-  for (uint32_t v = 0; v < nv_; ++v) {
-    uint32_t k = edge_offsets_[v];
-    V3 p = position(v);
-    for (uint32_t i = topology_.vertex_face_offsets[v]; i < topology_.vertex_face_offsets[v + 1]; ++i) {
-      uint32_t f = topology_.vertex_faces[i];
-      if (geom_.collapsed[f]) continue;
-      for (int j = 0; j < 3; ++j) {
-        uint32_t u = mesh_.indices[3 * size_t(f) + j];
-        if (u == v || interior_region_[u] == kNone) continue;
-        edge_target_[k] = u;
-        edge_length_[k++] = length(position(u) - p);
-      }
-    }
-  }
   candidates_.assign(regions_, {});
   cache_.assign(regions_, {});
 }
@@ -868,16 +839,22 @@ void Mesher::recolor() {
       }
     }
   }
+  // Heap entries ordered by (distance, color, vertex), a strict total order (an entry is pushed
+  // only when strictly better than the vertex's label, so never twice): any heap pops them in the
+  // same order. Distances are >= 0, whose bits order as the doubles do: two integer comparisons.
   struct Entry {
-    double d;
-    uint32_t color, v;
-    bool operator>(const Entry& o) const {
-      if (d != o.d) return d > o.d;
-      if (color != o.color) return color > o.color;
-      return v > o.v;
-    }
+    uint64_t distance_bits;
+    uint64_t color_vertex;
   };
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
+  auto later = [](const Entry& a, const Entry& b) {
+    return a.distance_bits != b.distance_bits ? a.distance_bits > b.distance_bits : a.color_vertex > b.color_vertex;
+  };
+  auto push = [&](std::vector<Entry>& heap, double d, uint32_t color, uint32_t v) {
+    assert(d >= 0);
+    heap.push_back({std::bit_cast<uint64_t>(d), uint64_t(color) << 32 | v});
+    std::push_heap(heap.begin(), heap.end(), later);
+  };
+  std::vector<Entry> heap;
   for (uint32_t r = 0; r < regions_; ++r) {
     if (!dirty_[r]) continue;
     dirty_[r] = 0;
@@ -889,22 +866,34 @@ void Mesher::recolor() {
       distance_[v] = std::numeric_limits<double>::infinity();
     }
     uint32_t l = region_loop_[r];
+    heap.clear();
     for (uint32_t i = loop_offsets_[l]; i < loop_offsets_[l + 1]; ++i) {
       uint32_t v = loop_vertex_[i];
-      if (color_[v] != kNone) heap.push({distance_[v], color_[v], v});
+      if (color_[v] != kNone) push(heap, distance_[v], color_[v], v);
     }
     while (!heap.empty()) {
-      Entry top = heap.top();
-      heap.pop();
-      if (top.d != distance_[top.v] || top.color != color_[top.v]) continue;  // stale
-      for (uint32_t i = edge_offsets_[top.v]; i < edge_offsets_[top.v + 1]; ++i) {
-        uint32_t u = edge_target_[i];
-        if (interior_region_[u] != r) continue;
-        double d = top.d + edge_length_[i];
-        if (d < distance_[u] || (d == distance_[u] && top.color < color_[u])) {
-          distance_[u] = d;
-          color_[u] = top.color;
-          heap.push({d, top.color, u});
+      std::pop_heap(heap.begin(), heap.end(), later);
+      const Entry e = heap.back();
+      heap.pop_back();
+      const double top_d = std::bit_cast<double>(e.distance_bits);
+      const uint32_t top_color = uint32_t(e.color_vertex >> 32), top_v = uint32_t(e.color_vertex);
+      if (top_d != distance_[top_v] || top_color != color_[top_v]) continue;  // stale
+      // The edges of top_v's faces into this region's interior. Each edge is met once per face
+      // around it (twice inside the mesh): the repeated relaxation fails its test. A neighbour
+      // already closer than top_v cannot improve (d >= top_d): no square root for it.
+      const V3 p = position(top_v);
+      for (uint32_t i = topology_.vertex_face_offsets[top_v]; i < topology_.vertex_face_offsets[top_v + 1]; ++i) {
+        const uint32_t f = topology_.vertex_faces[i];
+        if (geom_.collapsed[f]) continue;
+        for (int j = 0; j < 3; ++j) {
+          const uint32_t u = mesh_.indices[3 * size_t(f) + j];
+          if (u == top_v || interior_region_[u] != r || distance_[u] < top_d) continue;
+          const double d = top_d + length(position(u) - p);
+          if (d < distance_[u] || (d == distance_[u] && top_color < color_[u])) {
+            distance_[u] = d;
+            color_[u] = top_color;
+            push(heap, d, top_color, u);
+          }
         }
       }
     }
