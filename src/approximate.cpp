@@ -429,6 +429,7 @@ class Mesher {
   std::vector<uint32_t> loop_offsets_{0}, loop_vertex_, loop_neighbor_, loop_region_;
   std::vector<uint32_t> region_loop_;  // loop of each region, kNone when it has none or several
   std::vector<uint8_t> anchor_;        // AnchorKind per vertex
+  std::vector<uint32_t> anchor_list_;  // the vertices with an anchor (sorted by triangulate)
   std::vector<uint8_t> at_vertex_;     // per vertex: anchor placed at the vertex (anchor_position fix)
   std::vector<uint32_t> flip_anchors_; // per region: flip_anchor fixes so far
   std::vector<uint8_t> reverted_;      // per region: anchor_position fix applied
@@ -585,12 +586,16 @@ void Mesher::mark_corner_anchors() {
       if (loop_neighbor_[off + (i + m - 1) % m] != loop_neighbor_[off + i] && !anchor_[loop_vertex_[off + i]])
         anchor_[loop_vertex_[off + i]] = kCorner;
   }
-  for (uint32_t v = 0; v < nv_; ++v) out_.stats.corner_anchors += anchor_[v] == kCorner;
+  anchor_list_.clear();
+  for (uint32_t v = 0; v < nv_; ++v)
+    if (anchor_[v]) anchor_list_.push_back(v);
+  out_.stats.corner_anchors = uint32_t(anchor_list_.size());
 }
 
 void Mesher::add_anchor(uint32_t v, AnchorKind kind) {
   assert(anchor_[v] == kNoAnchor);
   anchor_[v] = kind;
+  anchor_list_.push_back(v);
   color_[v] = v;
   distance_[v] = 0;
   // The chords through v changed: every region around v needs its anchors settled and its coloring
@@ -1073,12 +1078,13 @@ uint32_t Mesher::triangulate_polygon(uint32_t region, const std::vector<uint32_t
 
 // One meshing round with the current anchors. Returns false when anchors were added (redo).
 bool Mesher::triangulate(bool last_round) {
-  // Output vertices and their positions.
-  out_id_.assign(nv_, kNone);
+  // Output vertices (in increasing input vertex order) and their positions. Anchors are only ever
+  // added: every round numbers all of them again, the other vertices keep kNone (set by run()).
+  std::sort(anchor_list_.begin(), anchor_list_.end());
   anchors_.clear();
   anchor_position_.clear();
-  for (uint32_t v = 0; v < nv_; ++v) {
-    if (!anchor_[v]) continue;
+  for (uint32_t v : anchor_list_) {
+    assert(anchor_[v]);
     out_id_[v] = uint32_t(anchors_.size());
     anchors_.push_back(v);
     uint32_t seen[64], distinct = 0;
@@ -1291,6 +1297,7 @@ void Mesher::run() {
   dirty_.assign(regions_, 1);
   unsettled_.assign(regions_, 1);
   index_regions();
+  out_id_.assign(nv_, kNone);
   color_.assign(nv_, kNone);
   distance_.assign(nv_, std::numeric_limits<double>::infinity());
   for (uint32_t v = 0; v < nv_; ++v)
@@ -1651,7 +1658,23 @@ uint32_t make_solid_components(const Mesh& mesh, const Topology& topology, const
   for (size_t h = 0; h < topology.face_adjacent.size(); ++h)
     if (topology.face_adjacent[h] == kNone) open[topology.face_component[h / 3]] = 1;
   for (int pass = 0; pass < 3; ++pass) {
-    // Regions of each closed component (a region lies in one component: regions are connected).
+    // The usual case first: every closed component has 4 or more regions (a region lies in one
+    // component: regions are connected), found without sorting a pair per face or the proxies.
+    {
+      std::vector<uint32_t> region_component(count, kNone), regions_in(components, 0);
+      bool spans = false;
+      for (uint32_t f = 0; f < labels.size(); ++f) {
+        const uint32_t c = topology.face_component[f];
+        if (open[c] || g.collapsed[f]) continue;
+        uint32_t& rc = region_component[labels[f]];
+        if (rc == kNone) rc = c, ++regions_in[c];
+        else spans |= rc != c;
+      }
+      bool few = false;
+      for (uint32_t c = 0; c < components && !few; ++c) few = regions_in[c] > 0 && regions_in[c] < 4;
+      if (!spans && !few) break;
+    }
+    // Regions of each closed component.
     std::vector<uint64_t> pairs;
     for (uint32_t f = 0; f < labels.size(); ++f)
       if (!open[topology.face_component[f]] && !g.collapsed[f])
