@@ -111,6 +111,8 @@ constexpr uint32_t kMaxTeleports = 32;
 constexpr double kTeleportMinGain = 0.02;
 // Meshing passes that split regions still giving flipped triangles (MeshingFix::split_curved).
 constexpr uint32_t kMaxSplitPasses = 4;
+// Interior vertices to color below which one thread does it (waking the workers costs more).
+constexpr uint64_t kMinParallelColoring = 4096;
 
 // ---- small vector helpers (double)
 
@@ -355,12 +357,23 @@ struct Chord {
   uint32_t steps = 0;  // edges; the last vertex is the anchor at step begin + steps (mod loop size)
 };
 
+// Heap entries of the coloring, ordered by (distance, color, vertex): a strict total order (an entry
+// is pushed only when strictly better than the vertex's label, so never twice), so any heap pops
+// them in the same order. Distances are >= 0, whose bits order as the doubles do: two integer
+// comparisons.
+struct HeapEntry {
+  uint64_t distance_bits;
+  uint64_t color_vertex;
+};
+
 class Mesher {
  public:
   Mesher(const Mesh& mesh, const Topology& topology, const FaceGeometry& geom, const std::vector<uint32_t>& labels,
-         uint32_t regions, const Proxies& proxies, const MeshingOptions& options, ShapeApproximation& out)
+         uint32_t regions, const Proxies& proxies, const MeshingOptions& options, WorkerPool& pool,
+         ShapeApproximation& out)
       : mesh_(mesh), topology_(topology), geom_(geom), labels_(labels), regions_(regions), proxies_(proxies),
-        options_(options), out_(out), nv_(uint32_t(mesh.vertex_count())), nf_(uint32_t(mesh.face_count())) {}
+        options_(options), pool_(pool), out_(out), nv_(uint32_t(mesh.vertex_count())),
+        nf_(uint32_t(mesh.face_count())) {}
 
   void run();
 
@@ -404,6 +417,7 @@ class Mesher {
   bool triangulate(bool last_round);
   void index_regions();
   void recolor();
+  void color_region(uint32_t r, std::vector<HeapEntry>& heap);
   std::vector<uint32_t> crossing_splits(uint32_t region, const std::vector<uint32_t>& polygon) const;
   uint32_t deviation_split(uint32_t region) const;
   bool valid_coloring(uint32_t region, const std::vector<uint32_t>& polygon, std::vector<uint32_t>& tris) const;
@@ -418,6 +432,7 @@ class Mesher {
   const uint32_t regions_;
   const Proxies& proxies_;
   const MeshingOptions& options_;
+  WorkerPool& pool_;
   ShapeApproximation& out_;
   const uint32_t nv_, nf_;
   double mean_edge_ = 0;
@@ -844,70 +859,92 @@ void Mesher::recolor() {
       }
     }
   }
-  // Heap entries ordered by (distance, color, vertex), a strict total order (an entry is pushed
-  // only when strictly better than the vertex's label, so never twice): any heap pops them in the
-  // same order. Distances are >= 0, whose bits order as the doubles do: two integer comparisons.
-  struct Entry {
-    uint64_t distance_bits;
-    uint64_t color_vertex;
-  };
-  auto later = [](const Entry& a, const Entry& b) {
-    return a.distance_bits != b.distance_bits ? a.distance_bits > b.distance_bits : a.color_vertex > b.color_vertex;
-  };
-  auto push = [&](std::vector<Entry>& heap, double d, uint32_t color, uint32_t v) {
-    assert(d >= 0);
-    heap.push_back({std::bit_cast<uint64_t>(d), uint64_t(color) << 32 | v});
-    std::push_heap(heap.begin(), heap.end(), later);
-  };
-  std::vector<Entry> heap;
+  // The regions to color, cut into one range per worker with about equal work (interior vertices):
+  // a region's interior vertices neighbour only its own interior and border, and the border colors
+  // are set above, so regions are colored independently, in any order, by any thread.
+  std::vector<uint32_t> todo;
+  uint64_t work = 0;
   for (uint32_t r = 0; r < regions_; ++r) {
     if (!dirty_[r]) continue;
     dirty_[r] = 0;
     candidates_[r].clear();
     if (!region_ok_[r] || fell_back_[r]) continue;  // triangulated directly from now on
-    for (uint32_t i = region_interior_offsets_[r]; i < region_interior_offsets_[r + 1]; ++i) {
-      uint32_t v = region_interior_[i];
-      color_[v] = kNone;
-      distance_[v] = std::numeric_limits<double>::infinity();
+    todo.push_back(r);
+    work += region_interior_offsets_[r + 1] - region_interior_offsets_[r] + 1;
+  }
+  const unsigned parts = work >= kMinParallelColoring ? pool_.size() : 1;
+  std::vector<size_t> bounds(parts + 1, todo.size());
+  bounds[0] = 0;
+  {
+    // Part p ends after the region that brings it to p / parts of the work.
+    uint64_t done = 0;
+    size_t p = 1;
+    for (size_t i = 0; i < todo.size() && p < parts; ++i) {
+      const uint32_t r = todo[i];
+      done += region_interior_offsets_[r + 1] - region_interior_offsets_[r] + 1;
+      while (p < parts && done * parts >= work * p) bounds[p++] = i + 1;
     }
-    uint32_t l = region_loop_[r];
-    heap.clear();
-    for (uint32_t i = loop_offsets_[l]; i < loop_offsets_[l + 1]; ++i) {
-      uint32_t v = loop_vertex_[i];
-      if (color_[v] != kNone) push(heap, distance_[v], color_[v], v);
-    }
-    while (!heap.empty()) {
-      std::pop_heap(heap.begin(), heap.end(), later);
-      const Entry e = heap.back();
-      heap.pop_back();
-      const double top_d = std::bit_cast<double>(e.distance_bits);
-      const uint32_t top_color = uint32_t(e.color_vertex >> 32), top_v = uint32_t(e.color_vertex);
-      if (top_d != distance_[top_v] || top_color != color_[top_v]) continue;  // stale
-      // The edges of top_v's faces into this region's interior. Each edge is met once per face
-      // around it (twice inside the mesh): the repeated relaxation fails its test. A neighbour
-      // already closer than top_v cannot improve (d >= top_d): no square root for it.
-      const V3 p = position(top_v);
-      for (uint32_t i = topology_.vertex_face_offsets[top_v]; i < topology_.vertex_face_offsets[top_v + 1]; ++i) {
-        const uint32_t f = topology_.vertex_faces[i];
-        if (geom_.collapsed[f]) continue;
-        for (int j = 0; j < 3; ++j) {
-          const uint32_t u = mesh_.indices[3 * size_t(f) + j];
-          if (u == top_v || interior_region_[u] != r || distance_[u] < top_d) continue;
-          const double d = top_d + length(position(u) - p);
-          if (d < distance_[u] || (d == distance_[u] && top_color < color_[u])) {
-            distance_[u] = d;
-            color_[u] = top_color;
-            push(heap, d, top_color, u);
-          }
+  }
+  pool_.run(parts, [&](size_t begin, size_t end, unsigned) {
+    std::vector<HeapEntry> heap;
+    for (size_t p = begin; p < end; ++p)
+      for (size_t i = bounds[p]; i < bounds[p + 1]; ++i) color_region(todo[i], heap);
+  }, /*min_parallel=*/2);
+}
+
+// Multi-source Dijkstra over region r's interior from its border (colors and distances set), then
+// the region's three-colored faces as candidate triangles.
+void Mesher::color_region(uint32_t r, std::vector<HeapEntry>& heap) {
+  auto later = [](const HeapEntry& a, const HeapEntry& b) {
+    return a.distance_bits != b.distance_bits ? a.distance_bits > b.distance_bits : a.color_vertex > b.color_vertex;
+  };
+  auto push = [&](double d, uint32_t color, uint32_t v) {
+    assert(d >= 0);
+    heap.push_back({std::bit_cast<uint64_t>(d), uint64_t(color) << 32 | v});
+    std::push_heap(heap.begin(), heap.end(), later);
+  };
+  for (uint32_t i = region_interior_offsets_[r]; i < region_interior_offsets_[r + 1]; ++i) {
+    uint32_t v = region_interior_[i];
+    color_[v] = kNone;
+    distance_[v] = std::numeric_limits<double>::infinity();
+  }
+  uint32_t l = region_loop_[r];
+  heap.clear();
+  for (uint32_t i = loop_offsets_[l]; i < loop_offsets_[l + 1]; ++i) {
+    uint32_t v = loop_vertex_[i];
+    if (color_[v] != kNone) push(distance_[v], color_[v], v);
+  }
+  while (!heap.empty()) {
+    std::pop_heap(heap.begin(), heap.end(), later);
+    const HeapEntry e = heap.back();
+    heap.pop_back();
+    const double top_d = std::bit_cast<double>(e.distance_bits);
+    const uint32_t top_color = uint32_t(e.color_vertex >> 32), top_v = uint32_t(e.color_vertex);
+    if (top_d != distance_[top_v] || top_color != color_[top_v]) continue;  // stale
+    // The edges of top_v's faces into this region's interior. Each edge is met once per face
+    // around it (twice inside the mesh): the repeated relaxation fails its test. A neighbour
+    // already closer than top_v cannot improve (d >= top_d): no square root for it.
+    const V3 p = position(top_v);
+    for (uint32_t i = topology_.vertex_face_offsets[top_v]; i < topology_.vertex_face_offsets[top_v + 1]; ++i) {
+      const uint32_t f = topology_.vertex_faces[i];
+      if (geom_.collapsed[f]) continue;
+      for (int j = 0; j < 3; ++j) {
+        const uint32_t u = mesh_.indices[3 * size_t(f) + j];
+        if (u == top_v || interior_region_[u] != r || distance_[u] < top_d) continue;
+        const double d = top_d + length(position(u) - p);
+        if (d < distance_[u] || (d == distance_[u] && top_color < color_[u])) {
+          distance_[u] = d;
+          color_[u] = top_color;
+          push(d, top_color, u);
         }
       }
     }
-    for (uint32_t i = region_face_offsets_[r]; i < region_face_offsets_[r + 1]; ++i) {
-      uint32_t f = region_faces_[i], c[3];
-      for (int j = 0; j < 3; ++j) c[j] = color_[mesh_.indices[3 * size_t(f) + j]];
-      if (c[0] != kNone && c[1] != kNone && c[2] != kNone && c[0] != c[1] && c[1] != c[2] && c[0] != c[2])
-        candidates_[r].insert(candidates_[r].end(), {c[0], c[1], c[2]});
-    }
+  }
+  for (uint32_t i = region_face_offsets_[r]; i < region_face_offsets_[r + 1]; ++i) {
+    uint32_t f = region_faces_[i], c[3];
+    for (int j = 0; j < 3; ++j) c[j] = color_[mesh_.indices[3 * size_t(f) + j]];
+    if (c[0] != kNone && c[1] != kNone && c[2] != kNone && c[0] != c[1] && c[1] != c[2] && c[0] != c[2])
+      candidates_[r].insert(candidates_[r].end(), {c[0], c[1], c[2]});
   }
 }
 
@@ -1704,8 +1741,10 @@ uint32_t make_solid_components(const Mesh& mesh, const Topology& topology, const
 }
 
 ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topology, const FaceGeometry& geom,
-                                       std::vector<uint32_t> labels, uint32_t regions, const MeshingOptions& options) {
+                                       std::vector<uint32_t> labels, uint32_t regions, const MeshingOptions& options,
+                                       unsigned threads) {
   auto t = Clock::now();
+  WorkerPool pool(threads);
   ShapeApproximation out;
   out.partition_proxies = regions;
   std::vector<MeshingFix> partition_fixes;  // region splits, kept over the passes
@@ -1716,7 +1755,7 @@ ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topolog
     proxies = compute_proxies(geom, labels, count);
     out.fixes = partition_fixes;
     out.stats = MeshingStats{};
-    Mesher(mesh, topology, geom, labels, count, proxies, options, out).run();
+    Mesher(mesh, topology, geom, labels, count, proxies, options, pool, out).run();
     // Regions still with flipped triangles are too curved for one polygon: split them, mesh again.
     std::vector<uint32_t> curved;
     for (const MeshingFix& f : out.fixes)
@@ -1750,7 +1789,7 @@ ShapeApproximation mesh_partition(const Mesh& mesh, const Topology& topology, co
   if (topology.face_adjacent.size() != 3 * mesh.face_count())
     throw OptionError("topology does not belong to this mesh");
   FaceGeometry geom = face_geometry(mesh);
-  return mesh_partition_with(mesh, topology, geom, labels, regions, options);
+  return mesh_partition_with(mesh, topology, geom, labels, regions, options, /*threads=*/0);
 }
 
 ShapeApproximation approximate_shape(const Mesh& mesh, const Topology& topology, const ApproximateOptions& options) {
@@ -1762,7 +1801,7 @@ ShapeApproximation approximate_shape(const Mesh& mesh, const Topology& topology,
   Clustering c = make_partition(mesh, topology, geom, options, rounds, refine_s);
   double partition_s = seconds_since(t);
   uint32_t n = uint32_t(c.generators.size() / 3);
-  ShapeApproximation out = mesh_partition_with(mesh, topology, geom, c.labels, n, options.meshing);
+  ShapeApproximation out = mesh_partition_with(mesh, topology, geom, c.labels, n, options.meshing, options.threads);
   out.clustering = std::move(c);
   out.requested_proxies = options.proxies;
   out.rounds = std::move(rounds);
