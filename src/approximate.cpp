@@ -1491,6 +1491,9 @@ class PartitionRefiner {
         if (e > worst_energy) worst_energy = e, worst = c;
       }
       // Merge cost of adjacent clusters i, j with their optimal normals: 2 (|S_i| + |S_j| - |S_i + S_j|).
+      // |S_c| once per cluster rather than twice per border edge (the same values).
+      std::vector<double> norm(n);
+      for (uint32_t c = 0; c < n; ++c) norm[c] = length(S(c));
       const std::vector<uint32_t>& labels = it_.labels();
       double best = std::numeric_limits<double>::infinity();
       uint32_t keep = kNone, drop = kNone;
@@ -1500,7 +1503,7 @@ class PartitionRefiner {
           if (o == kNone || o < f) continue;
           uint32_t i = labels[f], j = labels[o];
           if (i == j || i == worst || j == worst) continue;
-          double cost = 2 * (length(S(i)) + length(S(j)) - length(S(i) + S(j))) / problem_.fixed_scale;
+          double cost = 2 * (norm[i] + norm[j] - length(S(i) + S(j))) / problem_.fixed_scale;
           if (cost < best || (cost == best && std::min(i, j) < std::min(keep, drop)))
             best = cost, keep = std::min(i, j), drop = std::max(i, j);
         }
