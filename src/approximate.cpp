@@ -61,6 +61,7 @@
 // directions), no two chords join the same anchors, and diagonals are never shared, so every output
 // edge has two triangles; around an anchor the regions are disks meeting once each.
 #include <algorithm>
+#include <bit>
 #include <cassert>
 #include <chrono>
 #include <cmath>
@@ -110,6 +111,8 @@ constexpr uint32_t kMaxTeleports = 32;
 constexpr double kTeleportMinGain = 0.02;
 // Meshing passes that split regions still giving flipped triangles (MeshingFix::split_curved).
 constexpr uint32_t kMaxSplitPasses = 4;
+// Interior vertices to color below which one thread does it (waking the workers costs more).
+constexpr uint64_t kMinParallelColoring = 4096;
 
 // ---- small vector helpers (double)
 
@@ -354,12 +357,23 @@ struct Chord {
   uint32_t steps = 0;  // edges; the last vertex is the anchor at step begin + steps (mod loop size)
 };
 
+// Heap entries of the coloring, ordered by (distance, color, vertex): a strict total order (an entry
+// is pushed only when strictly better than the vertex's label, so never twice), so any heap pops
+// them in the same order. Distances are >= 0, whose bits order as the doubles do: two integer
+// comparisons.
+struct HeapEntry {
+  uint64_t distance_bits;
+  uint64_t color_vertex;
+};
+
 class Mesher {
  public:
   Mesher(const Mesh& mesh, const Topology& topology, const FaceGeometry& geom, const std::vector<uint32_t>& labels,
-         uint32_t regions, const Proxies& proxies, const MeshingOptions& options, ShapeApproximation& out)
+         uint32_t regions, const Proxies& proxies, const MeshingOptions& options, WorkerPool& pool,
+         ShapeApproximation& out)
       : mesh_(mesh), topology_(topology), geom_(geom), labels_(labels), regions_(regions), proxies_(proxies),
-        options_(options), out_(out), nv_(uint32_t(mesh.vertex_count())), nf_(uint32_t(mesh.face_count())) {}
+        options_(options), pool_(pool), out_(out), nv_(uint32_t(mesh.vertex_count())),
+        nf_(uint32_t(mesh.face_count())) {}
 
   void run();
 
@@ -403,6 +417,7 @@ class Mesher {
   bool triangulate(bool last_round);
   void index_regions();
   void recolor();
+  void color_region(uint32_t r, std::vector<HeapEntry>& heap);
   std::vector<uint32_t> crossing_splits(uint32_t region, const std::vector<uint32_t>& polygon) const;
   uint32_t deviation_split(uint32_t region) const;
   bool valid_coloring(uint32_t region, const std::vector<uint32_t>& polygon, std::vector<uint32_t>& tris) const;
@@ -417,6 +432,7 @@ class Mesher {
   const uint32_t regions_;
   const Proxies& proxies_;
   const MeshingOptions& options_;
+  WorkerPool& pool_;
   ShapeApproximation& out_;
   const uint32_t nv_, nf_;
   double mean_edge_ = 0;
@@ -428,6 +444,7 @@ class Mesher {
   std::vector<uint32_t> loop_offsets_{0}, loop_vertex_, loop_neighbor_, loop_region_;
   std::vector<uint32_t> region_loop_;  // loop of each region, kNone when it has none or several
   std::vector<uint8_t> anchor_;        // AnchorKind per vertex
+  std::vector<uint32_t> anchor_list_;  // the vertices with an anchor (sorted by triangulate)
   std::vector<uint8_t> at_vertex_;     // per vertex: anchor placed at the vertex (anchor_position fix)
   std::vector<uint32_t> flip_anchors_; // per region: flip_anchor fixes so far
   std::vector<uint8_t> reverted_;      // per region: anchor_position fix applied
@@ -440,9 +457,6 @@ class Mesher {
   std::vector<uint32_t> region_interior_offsets_, region_interior_;   // vertices on no border, CSR
   std::vector<uint8_t> on_border_;                                    // per vertex: on some loop
   std::vector<uint32_t> interior_region_;  // per vertex: its region when on no border, else kNone
-  // Edges into interior vertices (the only ones the Dijkstra relaxes), CSR per vertex, with lengths.
-  std::vector<uint32_t> edge_offsets_, edge_target_;
-  std::vector<double> edge_length_;
   std::vector<std::vector<uint32_t>> candidates_;  // per region: the coloring's triangles (input vertex ids)
   // Per region: the last direct triangulation and what it was made from, reused while they match.
   struct CachedTriangulation {
@@ -460,18 +474,22 @@ class Mesher {
   std::unordered_set<uint64_t> edges_;          // chord edges and accepted diagonals
   std::vector<uint32_t> color_;                 // per vertex: input vertex of its anchor (kNone: none yet)
   std::vector<double> distance_;
+
   std::vector<uint32_t> triangles_, triangle_regions_;
 };
 
 void Mesher::find_open_vertices() {
   open_.assign(nv_, 0);
+  // The mean edge length is ChordRule::cgal's unit alone: a square root per half-edge otherwise spent
+  // for nothing.
+  const bool measure = options_.chord_rule == ChordRule::cgal;
   double total = 0;
   uint64_t edges = 0;
   for (uint32_t f = 0; f < nf_; ++f) {
     if (geom_.collapsed[f]) continue;
     for (int e = 0; e < 3; ++e) {
       uint32_t a = mesh_.indices[3 * size_t(f) + e], b = mesh_.indices[3 * size_t(f) + (e + 1) % 3];
-      total += length(position(a) - position(b));
+      if (measure) total += length(position(a) - position(b));
       ++edges;
       if (topology_.face_adjacent[3 * size_t(f) + e] == kNone) open_[a] = open_[b] = 1;
     }
@@ -583,12 +601,16 @@ void Mesher::mark_corner_anchors() {
       if (loop_neighbor_[off + (i + m - 1) % m] != loop_neighbor_[off + i] && !anchor_[loop_vertex_[off + i]])
         anchor_[loop_vertex_[off + i]] = kCorner;
   }
-  for (uint32_t v = 0; v < nv_; ++v) out_.stats.corner_anchors += anchor_[v] == kCorner;
+  anchor_list_.clear();
+  for (uint32_t v = 0; v < nv_; ++v)
+    if (anchor_[v]) anchor_list_.push_back(v);
+  out_.stats.corner_anchors = uint32_t(anchor_list_.size());
 }
 
 void Mesher::add_anchor(uint32_t v, AnchorKind kind) {
   assert(anchor_[v] == kNoAnchor);
   anchor_[v] = kind;
+  anchor_list_.push_back(v);
   color_[v] = v;
   distance_[v] = 0;
   // The chords through v changed: every region around v needs its anchors settled and its coloring
@@ -808,37 +830,6 @@ void Mesher::index_regions() {
   interior_region_.assign(nv_, kNone);
   for (uint32_t v = 0; v < nv_; ++v)
     if (!on_border_[v]) interior_region_[v] = vertex_region[v];
-  // Each edge appears once per face around it (twice inside the mesh): a repeated relaxation fails
-  // its test at once, cheaper than sorting the lists.
-  edge_offsets_.assign(size_t(nv_) + 1, 0);
-  for (uint32_t v = 0; v < nv_; ++v) {
-    uint32_t count = 0;
-    for (uint32_t i = topology_.vertex_face_offsets[v]; i < topology_.vertex_face_offsets[v + 1]; ++i) {
-      uint32_t f = topology_.vertex_faces[i];
-      if (geom_.collapsed[f]) continue;
-      for (int j = 0; j < 3; ++j) {
-        uint32_t u = mesh_.indices[3 * size_t(f) + j];
-        count += u != v && interior_region_[u] != kNone;
-      }
-    }
-    edge_offsets_[v + 1] = edge_offsets_[v] + count;
-  }
-  edge_target_.resize(edge_offsets_.back());
-  edge_length_.resize(edge_offsets_.back());
-  for (uint32_t v = 0; v < nv_; ++v) {
-    uint32_t k = edge_offsets_[v];
-    V3 p = position(v);
-    for (uint32_t i = topology_.vertex_face_offsets[v]; i < topology_.vertex_face_offsets[v + 1]; ++i) {
-      uint32_t f = topology_.vertex_faces[i];
-      if (geom_.collapsed[f]) continue;
-      for (int j = 0; j < 3; ++j) {
-        uint32_t u = mesh_.indices[3 * size_t(f) + j];
-        if (u == v || interior_region_[u] == kNone) continue;
-        edge_target_[k] = u;
-        edge_length_[k++] = length(position(u) - p);
-      }
-    }
-  }
   candidates_.assign(regions_, {});
   cache_.assign(regions_, {});
 }
@@ -868,52 +859,92 @@ void Mesher::recolor() {
       }
     }
   }
-  struct Entry {
-    double d;
-    uint32_t color, v;
-    bool operator>(const Entry& o) const {
-      if (d != o.d) return d > o.d;
-      if (color != o.color) return color > o.color;
-      return v > o.v;
-    }
-  };
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
+  // The regions to color, cut into one range per worker with about equal work (interior vertices):
+  // a region's interior vertices neighbour only its own interior and border, and the border colors
+  // are set above, so regions are colored independently, in any order, by any thread.
+  std::vector<uint32_t> todo;
+  uint64_t work = 0;
   for (uint32_t r = 0; r < regions_; ++r) {
     if (!dirty_[r]) continue;
     dirty_[r] = 0;
     candidates_[r].clear();
     if (!region_ok_[r] || fell_back_[r]) continue;  // triangulated directly from now on
-    for (uint32_t i = region_interior_offsets_[r]; i < region_interior_offsets_[r + 1]; ++i) {
-      uint32_t v = region_interior_[i];
-      color_[v] = kNone;
-      distance_[v] = std::numeric_limits<double>::infinity();
+    todo.push_back(r);
+    work += region_interior_offsets_[r + 1] - region_interior_offsets_[r] + 1;
+  }
+  const unsigned parts = work >= kMinParallelColoring ? pool_.size() : 1;
+  std::vector<size_t> bounds(parts + 1, todo.size());
+  bounds[0] = 0;
+  {
+    // Part p ends after the region that brings it to p / parts of the work.
+    uint64_t done = 0;
+    size_t p = 1;
+    for (size_t i = 0; i < todo.size() && p < parts; ++i) {
+      const uint32_t r = todo[i];
+      done += region_interior_offsets_[r + 1] - region_interior_offsets_[r] + 1;
+      while (p < parts && done * parts >= work * p) bounds[p++] = i + 1;
     }
-    uint32_t l = region_loop_[r];
-    for (uint32_t i = loop_offsets_[l]; i < loop_offsets_[l + 1]; ++i) {
-      uint32_t v = loop_vertex_[i];
-      if (color_[v] != kNone) heap.push({distance_[v], color_[v], v});
-    }
-    while (!heap.empty()) {
-      Entry top = heap.top();
-      heap.pop();
-      if (top.d != distance_[top.v] || top.color != color_[top.v]) continue;  // stale
-      for (uint32_t i = edge_offsets_[top.v]; i < edge_offsets_[top.v + 1]; ++i) {
-        uint32_t u = edge_target_[i];
-        if (interior_region_[u] != r) continue;
-        double d = top.d + edge_length_[i];
-        if (d < distance_[u] || (d == distance_[u] && top.color < color_[u])) {
+  }
+  pool_.run(parts, [&](size_t begin, size_t end, unsigned) {
+    std::vector<HeapEntry> heap;
+    for (size_t p = begin; p < end; ++p)
+      for (size_t i = bounds[p]; i < bounds[p + 1]; ++i) color_region(todo[i], heap);
+  }, /*min_parallel=*/2);
+}
+
+// Multi-source Dijkstra over region r's interior from its border (colors and distances set), then
+// the region's three-colored faces as candidate triangles.
+void Mesher::color_region(uint32_t r, std::vector<HeapEntry>& heap) {
+  auto later = [](const HeapEntry& a, const HeapEntry& b) {
+    return a.distance_bits != b.distance_bits ? a.distance_bits > b.distance_bits : a.color_vertex > b.color_vertex;
+  };
+  auto push = [&](double d, uint32_t color, uint32_t v) {
+    assert(d >= 0);
+    heap.push_back({std::bit_cast<uint64_t>(d), uint64_t(color) << 32 | v});
+    std::push_heap(heap.begin(), heap.end(), later);
+  };
+  for (uint32_t i = region_interior_offsets_[r]; i < region_interior_offsets_[r + 1]; ++i) {
+    uint32_t v = region_interior_[i];
+    color_[v] = kNone;
+    distance_[v] = std::numeric_limits<double>::infinity();
+  }
+  uint32_t l = region_loop_[r];
+  heap.clear();
+  for (uint32_t i = loop_offsets_[l]; i < loop_offsets_[l + 1]; ++i) {
+    uint32_t v = loop_vertex_[i];
+    if (color_[v] != kNone) push(distance_[v], color_[v], v);
+  }
+  while (!heap.empty()) {
+    std::pop_heap(heap.begin(), heap.end(), later);
+    const HeapEntry e = heap.back();
+    heap.pop_back();
+    const double top_d = std::bit_cast<double>(e.distance_bits);
+    const uint32_t top_color = uint32_t(e.color_vertex >> 32), top_v = uint32_t(e.color_vertex);
+    if (top_d != distance_[top_v] || top_color != color_[top_v]) continue;  // stale
+    // The edges of top_v's faces into this region's interior. Each edge is met once per face
+    // around it (twice inside the mesh): the repeated relaxation fails its test. A neighbour
+    // already closer than top_v cannot improve (d >= top_d): no square root for it.
+    const V3 p = position(top_v);
+    for (uint32_t i = topology_.vertex_face_offsets[top_v]; i < topology_.vertex_face_offsets[top_v + 1]; ++i) {
+      const uint32_t f = topology_.vertex_faces[i];
+      if (geom_.collapsed[f]) continue;
+      for (int j = 0; j < 3; ++j) {
+        const uint32_t u = mesh_.indices[3 * size_t(f) + j];
+        if (u == top_v || interior_region_[u] != r || distance_[u] < top_d) continue;
+        const double d = top_d + length(position(u) - p);
+        if (d < distance_[u] || (d == distance_[u] && top_color < color_[u])) {
           distance_[u] = d;
-          color_[u] = top.color;
-          heap.push({d, top.color, u});
+          color_[u] = top_color;
+          push(d, top_color, u);
         }
       }
     }
-    for (uint32_t i = region_face_offsets_[r]; i < region_face_offsets_[r + 1]; ++i) {
-      uint32_t f = region_faces_[i], c[3];
-      for (int j = 0; j < 3; ++j) c[j] = color_[mesh_.indices[3 * size_t(f) + j]];
-      if (c[0] != kNone && c[1] != kNone && c[2] != kNone && c[0] != c[1] && c[1] != c[2] && c[0] != c[2])
-        candidates_[r].insert(candidates_[r].end(), {c[0], c[1], c[2]});
-    }
+  }
+  for (uint32_t i = region_face_offsets_[r]; i < region_face_offsets_[r + 1]; ++i) {
+    uint32_t f = region_faces_[i], c[3];
+    for (int j = 0; j < 3; ++j) c[j] = color_[mesh_.indices[3 * size_t(f) + j]];
+    if (c[0] != kNone && c[1] != kNone && c[2] != kNone && c[0] != c[1] && c[1] != c[2] && c[0] != c[2])
+      candidates_[r].insert(candidates_[r].end(), {c[0], c[1], c[2]});
   }
 }
 
@@ -1084,12 +1115,13 @@ uint32_t Mesher::triangulate_polygon(uint32_t region, const std::vector<uint32_t
 
 // One meshing round with the current anchors. Returns false when anchors were added (redo).
 bool Mesher::triangulate(bool last_round) {
-  // Output vertices and their positions.
-  out_id_.assign(nv_, kNone);
+  // Output vertices (in increasing input vertex order) and their positions. Anchors are only ever
+  // added: every round numbers all of them again, the other vertices keep kNone (set by run()).
+  std::sort(anchor_list_.begin(), anchor_list_.end());
   anchors_.clear();
   anchor_position_.clear();
-  for (uint32_t v = 0; v < nv_; ++v) {
-    if (!anchor_[v]) continue;
+  for (uint32_t v : anchor_list_) {
+    assert(anchor_[v]);
     out_id_[v] = uint32_t(anchors_.size());
     anchors_.push_back(v);
     uint32_t seen[64], distinct = 0;
@@ -1302,6 +1334,7 @@ void Mesher::run() {
   dirty_.assign(regions_, 1);
   unsettled_.assign(regions_, 1);
   index_regions();
+  out_id_.assign(nv_, kNone);
   color_.assign(nv_, kNone);
   distance_.assign(nv_, std::numeric_limits<double>::infinity());
   for (uint32_t v = 0; v < nv_; ++v)
@@ -1342,6 +1375,49 @@ ClusterOptions cluster_options(const ApproximateOptions& o, uint32_t clusters) {
 }
 
 
+// Whether repair_connectivity has nothing to do: every cluster is one edge-connected piece and none
+// is enclosed (see enclosed_clusters: no boundary edge, exactly one neighbouring cluster, which has
+// others). The usual case after a topology-preserving run; two passes over the faces, where the
+// repair's own checks (union-find, or a walk per cluster and a sorted cluster graph) cost about 6x
+// as much and were a quarter of every teleport.
+bool nothing_to_repair(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t clusters) {
+  const uint32_t nf = uint32_t(labels.size());
+  // First neighbouring cluster of each cluster, whether it has a second one, whether it is open.
+  std::vector<uint32_t> neighbour(clusters, kNone);
+  std::vector<uint8_t> several(clusters, 0), open(clusters, 0);
+  for (uint32_t f = 0; f < nf; ++f) {
+    const uint32_t l = labels[f];
+    for (int e = 0; e < 3; ++e) {
+      const uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
+      if (o == kNone) {
+        open[l] = 1;
+      } else if (labels[o] != l) {
+        if (neighbour[l] == kNone) neighbour[l] = labels[o];
+        else if (neighbour[l] != labels[o]) several[l] = 1;
+      }
+    }
+  }
+  for (uint32_t c = 0; c < clusters; ++c)
+    if (!open[c] && neighbour[c] != kNone && !several[c] && several[neighbour[c]]) return false;
+  // One walk per piece: a cluster met by a second walk has two pieces.
+  std::vector<uint8_t> visited(nf, 0), walked(clusters, 0);
+  std::vector<uint32_t> walk;
+  for (uint32_t f = 0; f < nf; ++f) {
+    if (visited[f]) continue;
+    const uint32_t l = labels[f];
+    if (walked[l]) return false;
+    walked[l] = 1;
+    visited[f] = 1;
+    walk.assign(1, f);
+    for (size_t head = 0; head < walk.size(); ++head)
+      for (int e = 0; e < 3; ++e) {
+        const uint32_t o = topology.face_adjacent[3 * size_t(walk[head]) + e];
+        if (o != kNone && !visited[o] && labels[o] == l) visited[o] = 1, walk.push_back(o);
+      }
+  }
+  return true;
+}
+
 // Iterate + repair rounds from the iteration's current labels, as cluster() does. Returns the next
 // free round number.
 uint32_t converge(BoundaryIteration& it, const ClusterProblem& problem, const Topology& topology,
@@ -1350,7 +1426,8 @@ uint32_t converge(BoundaryIteration& it, const ClusterProblem& problem, const To
     out.converged = run_iterations(it, o.max_iterations, o.progress, round, out);
     std::vector<uint32_t> current = it.labels();
     std::vector<float> generators = it.generators();
-    bool repaired = repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair);
+    bool repaired = !nothing_to_repair(topology, current, problem.clusters) &&
+                    repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair);
     uint32_t restored = restore_cluster_count(problem, topology, generators, current, problem.clusters);
     out.repair.restored_clusters += restored;
     if (!repaired && restored == 0) return round + 1;
@@ -1414,6 +1491,9 @@ class PartitionRefiner {
         if (e > worst_energy) worst_energy = e, worst = c;
       }
       // Merge cost of adjacent clusters i, j with their optimal normals: 2 (|S_i| + |S_j| - |S_i + S_j|).
+      // |S_c| once per cluster rather than twice per border edge (the same values).
+      std::vector<double> norm(n);
+      for (uint32_t c = 0; c < n; ++c) norm[c] = length(S(c));
       const std::vector<uint32_t>& labels = it_.labels();
       double best = std::numeric_limits<double>::infinity();
       uint32_t keep = kNone, drop = kNone;
@@ -1423,7 +1503,7 @@ class PartitionRefiner {
           if (o == kNone || o < f) continue;
           uint32_t i = labels[f], j = labels[o];
           if (i == j || i == worst || j == worst) continue;
-          double cost = 2 * (length(S(i)) + length(S(j)) - length(S(i) + S(j))) / problem_.fixed_scale;
+          double cost = 2 * (norm[i] + norm[j] - length(S(i) + S(j))) / problem_.fixed_scale;
           if (cost < best || (cost == best && std::min(i, j) < std::min(keep, drop)))
             best = cost, keep = std::min(i, j), drop = std::max(i, j);
         }
@@ -1446,8 +1526,10 @@ class PartitionRefiner {
         if (low_gains >= 2) break;
         continue;
       }
-      // Not better: back to where it was.
-      it_.reset(std::move(saved));
+      // Not better: back to where it was. The moves back (relabel) give the same labels, sums and
+      // generators as a reset, for a pass over the labels instead of rebuilding the engine's state;
+      // nothing iterates from here before the next reset (add_proxies) or the end.
+      it_.relabel(saved);
       out_.history.resize(history);
       out_.iterations = iterations;
       out_.converged = converged;
@@ -1616,7 +1698,23 @@ uint32_t make_solid_components(const Mesh& mesh, const Topology& topology, const
   for (size_t h = 0; h < topology.face_adjacent.size(); ++h)
     if (topology.face_adjacent[h] == kNone) open[topology.face_component[h / 3]] = 1;
   for (int pass = 0; pass < 3; ++pass) {
-    // Regions of each closed component (a region lies in one component: regions are connected).
+    // The usual case first: every closed component has 4 or more regions (a region lies in one
+    // component: regions are connected), found without sorting a pair per face or the proxies.
+    {
+      std::vector<uint32_t> region_component(count, kNone), regions_in(components, 0);
+      bool spans = false;
+      for (uint32_t f = 0; f < labels.size(); ++f) {
+        const uint32_t c = topology.face_component[f];
+        if (open[c] || g.collapsed[f]) continue;
+        uint32_t& rc = region_component[labels[f]];
+        if (rc == kNone) rc = c, ++regions_in[c];
+        else spans |= rc != c;
+      }
+      bool few = false;
+      for (uint32_t c = 0; c < components && !few; ++c) few = regions_in[c] > 0 && regions_in[c] < 4;
+      if (!spans && !few) break;
+    }
+    // Regions of each closed component.
     std::vector<uint64_t> pairs;
     for (uint32_t f = 0; f < labels.size(); ++f)
       if (!open[topology.face_component[f]] && !g.collapsed[f])
@@ -1646,8 +1744,10 @@ uint32_t make_solid_components(const Mesh& mesh, const Topology& topology, const
 }
 
 ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topology, const FaceGeometry& geom,
-                                       std::vector<uint32_t> labels, uint32_t regions, const MeshingOptions& options) {
+                                       std::vector<uint32_t> labels, uint32_t regions, const MeshingOptions& options,
+                                       unsigned threads) {
   auto t = Clock::now();
+  WorkerPool pool(threads);
   ShapeApproximation out;
   out.partition_proxies = regions;
   std::vector<MeshingFix> partition_fixes;  // region splits, kept over the passes
@@ -1658,7 +1758,7 @@ ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topolog
     proxies = compute_proxies(geom, labels, count);
     out.fixes = partition_fixes;
     out.stats = MeshingStats{};
-    Mesher(mesh, topology, geom, labels, count, proxies, options, out).run();
+    Mesher(mesh, topology, geom, labels, count, proxies, options, pool, out).run();
     // Regions still with flipped triangles are too curved for one polygon: split them, mesh again.
     std::vector<uint32_t> curved;
     for (const MeshingFix& f : out.fixes)
@@ -1692,7 +1792,7 @@ ShapeApproximation mesh_partition(const Mesh& mesh, const Topology& topology, co
   if (topology.face_adjacent.size() != 3 * mesh.face_count())
     throw OptionError("topology does not belong to this mesh");
   FaceGeometry geom = face_geometry(mesh);
-  return mesh_partition_with(mesh, topology, geom, labels, regions, options);
+  return mesh_partition_with(mesh, topology, geom, labels, regions, options, /*threads=*/0);
 }
 
 ShapeApproximation approximate_shape(const Mesh& mesh, const Topology& topology, const ApproximateOptions& options) {
@@ -1704,7 +1804,7 @@ ShapeApproximation approximate_shape(const Mesh& mesh, const Topology& topology,
   Clustering c = make_partition(mesh, topology, geom, options, rounds, refine_s);
   double partition_s = seconds_since(t);
   uint32_t n = uint32_t(c.generators.size() / 3);
-  ShapeApproximation out = mesh_partition_with(mesh, topology, geom, c.labels, n, options.meshing);
+  ShapeApproximation out = mesh_partition_with(mesh, topology, geom, c.labels, n, options.meshing, options.threads);
   out.clustering = std::move(c);
   out.requested_proxies = options.proxies;
   out.rounds = std::move(rounds);

@@ -224,7 +224,8 @@ ShapeApproximation approximate_shape(const Mesh& mesh, const ApproximateOptions&
 /// connected or disks: that is fixed and reported). O(F log F) for the coloring, plus O(m^3) for
 /// each anchor polygon of m corners triangulated directly. Throws OptionError when labels.size() differs
 /// from the face count, a label is >= regions, or the chord error is negative or not finite.
-/// `clustering`, `requested_proxies` and `rounds` of the result are left empty.
+/// `clustering`, `requested_proxies` and `rounds` of the result are left empty. The coloring runs on
+/// every core (the result does not depend on the thread count).
 ShapeApproximation mesh_partition(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
                                   uint32_t regions, const MeshingOptions& options = {});
 
