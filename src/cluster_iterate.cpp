@@ -607,9 +607,7 @@ IterationRecord BoundaryIteration::step() {
   // 1. gather proposals
   ++iteration_;
   collect_active_faces();
-  // (A test takes 0.1-0.3 us and the pool hands work over in about 0.3 us while its workers poll:
-  // worth two threads from a few hundred faces on.)
-  pool_.run(active_.size(), [&](size_t b, size_t e, unsigned w) { evaluate_range(b, e, w); }, /*min_parallel=*/256);
+  pool_.run(active_.size(), [&](size_t b, size_t e, unsigned w) { evaluate_range(b, e, w); });
   if (accelerate_) {
     sum_live_watches();
     size_t entries = 0;
@@ -653,7 +651,7 @@ IterationRecord BoundaryIteration::step() {
         store.insert(store.end(), ring.begin(), ring.end());
         if (ring_keeps_disks(topology_, labels_, ring, f, destination_[f])) proposal_state_[f] = kPassedDiskTests;
       }
-    }, /*min_parallel=*/64);  // a ring gathered and tested: about a microsecond a proposal
+    });
     pool_.run(proposals.size(), [&](size_t b, size_t e, unsigned) {
       for (size_t i = b; i < e; ++i) {
         uint32_t f = proposals[i];
@@ -675,7 +673,7 @@ IterationRecord BoundaryIteration::step() {
           }
         }
       }
-    }, /*min_parallel=*/256);
+    });
   }
 
   // 3. apply all accepted moves at once
