@@ -56,7 +56,13 @@ std::vector<double> mass_centroids(const Mesh& mesh, const std::vector<uint32_t>
 std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
                                           VertexPlacement placement, const std::vector<float>* face_weights,
                                           const std::vector<uint32_t>& vertex_cluster,
-                                          const std::vector<double>& centroids, unsigned threads);
+                                          const std::vector<double>& centroids, unsigned threads,
+                                          std::vector<uint32_t>* faces);
+// In coarse_relax.cpp: relax_coarse_vertices, starting from a face per vertex where start_faces
+// gives one (the face under the vertex; kNone or a missing array: found by a walk).
+uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& topology,
+                               const std::vector<uint32_t>& labels, uint32_t passes, double max_normal_turn_deg,
+                               const std::vector<uint32_t>* start_faces);
 }  // namespace detail
 
 namespace {
@@ -633,8 +639,11 @@ void sort_defects(std::vector<DualDefect>& defects) {
   defects.erase(std::unique(defects.begin(), defects.end()), defects.end());
 }
 
+// vertex_faces: when not null, the face under each vertex where the placement knows it (see
+// detail::place_cluster_vertices).
 CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
-                  uint32_t clusters, const CoarsenOptions& options, const std::vector<float>* face_weights) {
+                  uint32_t clusters, const CoarsenOptions& options, const std::vector<float>* face_weights,
+                  std::vector<uint32_t>* vertex_faces = nullptr) {
   check_topology(mesh, topology, clusters);
   check_placement_inputs(mesh, labels, clusters, face_weights);
   DualStructure dual;
@@ -674,7 +683,7 @@ CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<
   }
   std::vector<float> positions = detail::place_cluster_vertices(mesh, labels, clusters, options.placement,
                                                                 face_weights, dual.vertex_state, centroids,
-                                                                options.threads);
+                                                                options.threads, vertex_faces);
 
   CoarsenResult result;
   cluster_defects(dual, result.defects);
@@ -706,10 +715,17 @@ CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<
 CoarsenResult coarsen_clustering(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
                                  uint32_t clusters, const CoarsenOptions& options,
                                  const std::vector<float>* face_weights) {
-  CoarsenResult result = run(mesh, topology, labels, clusters, options, face_weights);
+  std::vector<uint32_t> vertex_faces;
+  CoarsenResult result = run(mesh, topology, labels, clusters, options, face_weights, &vertex_faces);
   // Flips need a clean manifold dual: with defects, edges may have more than two triangles.
   if (options.flip_edges && result.defects.empty())
     result.flipped_edges = flip_coarse_edges(result.mesh, options.flip_max_dihedral_deg);
+  if (options.relax_passes > 0 && result.defects.empty()) {
+    result.relaxed_moves = detail::relax_coarse_vertices(result.mesh, mesh, topology, labels, options.relax_passes,
+                                                         options.relax_max_normal_turn_deg, &vertex_faces);
+    if (options.flip_edges && result.relaxed_moves > 0)
+      result.flipped_edges += flip_coarse_edges(result.mesh, options.flip_max_dihedral_deg);
+  }
   return result;
 }
 

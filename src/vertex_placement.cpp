@@ -206,8 +206,9 @@ std::vector<float> place_closest(const Mesh& mesh, const std::vector<uint32_t>& 
 // nearer than the cluster's own faces; keeping the vertex on its own cluster is what the dual
 // wants anyway (vertices stay in cluster order, no two clusters trade places).
 std::vector<float> place_projected(const Mesh& mesh, uint32_t clusters, const std::vector<double>& centroids,
-                                   const std::vector<uint32_t>& labels) {
+                                   const std::vector<uint32_t>& labels, std::vector<uint32_t>* faces) {
   std::vector<double> best_distance(clusters, -1.0), best_point(3 * size_t(clusters), 0.0);
+  if (faces) faces->assign(clusters, kNone);
   for (uint32_t f = 0; f < labels.size(); ++f) {
     const uint32_t c = labels[f];
     double corner[3][3];
@@ -234,6 +235,7 @@ std::vector<float> place_projected(const Mesh& mesh, uint32_t clusters, const st
     double d2 = closest_point_on_triangle(&centroids[3 * size_t(c)], corner[0], corner[1], corner[2], point);
     if (best_distance[c] < 0 || d2 < best_distance[c]) {  // ties: the lower face id
       best_distance[c] = d2;
+      if (faces) (*faces)[c] = f;
       for (int d = 0; d < 3; ++d) best_point[3 * size_t(c) + d] = point[d];
     }
   }
@@ -341,12 +343,14 @@ namespace detail {
 std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
                                           VertexPlacement placement, const std::vector<float>* face_weights,
                                           const std::vector<uint32_t>& vertex_cluster,
-                                          const std::vector<double>& centroids, unsigned /*threads*/) {
+                                          const std::vector<double>& centroids, unsigned /*threads*/,
+                                          std::vector<uint32_t>* faces) {
+  if (faces) faces->clear();  // unknown unless the placement knows it
   switch (placement) {
     case VertexPlacement::closest:
       return place_closest(mesh, labels, clusters, centroids, vertex_cluster);
     case VertexPlacement::projected:
-      return place_projected(mesh, clusters, centroids, labels);
+      return place_projected(mesh, clusters, centroids, labels, faces);
     case VertexPlacement::qem:
       return place_qem(mesh, labels, clusters, centroids, face_weights);
   }
@@ -381,7 +385,7 @@ std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<ui
     }
   }
   return detail::place_cluster_vertices(mesh, labels, clusters, placement, face_weights, vertex_cluster,
-                                        detail::mass_centroids(mesh, labels, clusters, face_weights), 0);
+                                        detail::mass_centroids(mesh, labels, clusters, face_weights), 0, nullptr);
 }
 
 VertexPlacement parse_vertex_placement(const std::string& s) {

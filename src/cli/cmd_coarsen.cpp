@@ -26,6 +26,7 @@ namespace {
 struct CoarsenArgs {
   std::string input, output, report, metric = "cvt", placement = "projected", device;
   uint32_t clusters = 0, fix_rounds = CoarsenMeshOptions{}.max_fix_rounds;
+  uint32_t relax_passes = CoarsenOptions{}.relax_passes;
   unsigned threads = 0;
   bool quiet = false, no_weld = false, no_error = false, no_flips = false;
   double gradation = 0;   ///< --gradation g: curvature-adaptive density (meshcvt/density.h); 0 = uniform
@@ -95,6 +96,7 @@ void run_coarsen(const CoarsenArgs& a) {
   co.placement = parse_vertex_placement(a.placement);
   co.threads = a.threads;
   co.flip_edges = !a.no_flips;
+  co.relax_passes = a.relax_passes;
 
   prepare_allocator(a.input);
   auto t0 = Clock::now();
@@ -174,7 +176,8 @@ void run_coarsen(const CoarsenArgs& a) {
     if (!a.no_error)
       j.begin_object("error").value("hausdorff", err.hausdorff).value("hausdorff_rel", err.hausdorff_rel)
           .value("rms", err.rms).value("rms_rel", err.rms_rel).end_object();
-    j.value("flipped_edges", r.flipped_edges);
+    j.value("flipped_edges", r.flipped_edges).value("relax_passes", a.relax_passes)
+        .value("relax_max_normal_turn_deg", co.relax_max_normal_turn_deg).value("relaxed_moves", r.relaxed_moves);
     j.begin_array("defects");
     for (const DualDefect& d : r.defects)
       j.begin_object().value("kind", to_string(d.kind)).value("cluster", d.cluster).value("other", d.other).end_object();
@@ -223,7 +226,8 @@ void run_coarsen(const CoarsenArgs& a) {
     std::printf("quality: min angle %.2f deg, avg min angle %.2f deg, angles < 30: %llu, Q min %.3f, Q avg %.3f",
                 q.min_angle_deg, q.avg_min_angle_deg, (unsigned long long)q.angles_below_30, q.q_min, q.q_avg);
     if (!a.no_error) std::printf("; Hausdorff %.3g%% of the diagonal, RMS %.3g%%", 100 * err.hausdorff_rel, 100 * err.rms_rel);
-    std::printf("\n%s; %llu edges flipped\n", fix_line.c_str(), (unsigned long long)r.flipped_edges);
+    std::printf("\n%s; %llu edges flipped, %llu vertex moves\n", fix_line.c_str(), (unsigned long long)r.flipped_edges,
+                (unsigned long long)r.relaxed_moves);
     std::printf("time: cluster %.3f s, fixes %.3f s, coarsen %.3f s; wrote %s\n", job.cluster_seconds,
                 job.fix_seconds, coarsen_s, a.output.c_str());
   }
@@ -246,6 +250,10 @@ const RegisterCommand reg(30, [](CLI::App& app) {
   sub->add_option("--fix-rounds", a->fix_rounds,
                   "rounds of fixing the clustering where its dual is not a manifold (default 12; 0 = report only)");
   sub->add_option("--threads", a->threads, "worker threads, 0 = all cores");
+  sub->add_option("--relax-passes", a->relax_passes,
+                  "passes moving each coarse vertex over its own cluster toward the middle of its ring where that "
+                  "improves its triangles (smallest angle never drops), then edge flips again (default " +
+                      std::to_string(CoarsenOptions{}.relax_passes) + "; 0 = off)");
   sub->add_flag("--no-flips", a->no_flips, "keep the dual's triangles as built (no edge flips improving angles)");
   sub->add_flag("--no-weld", a->no_weld, "do not merge vertices with identical positions");
   sub->add_flag("--no-error", a->no_error, "skip measuring the distance to the input");

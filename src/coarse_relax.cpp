@@ -1,0 +1,404 @@
+// meshcvt: moves the vertices of a coarse mesh over their own clusters to improve its triangles
+// (declared in meshcvt/coarsen.h), the tangential-relaxation step of surface remeshing (Botsch and
+// Kobbelt, SGP 2004) held to the clustering.
+//
+// Why: a coarse vertex is one point of its cluster (VertexPlacement), chosen from the cluster alone.
+// Where clusters hold only a few input faces (fandisk -> 1000: 13 faces per cluster) their shapes
+// follow the input's triangles, their centroids jitter by a fraction of an edge, and the dual gets
+// obtuse triangles with angles below 30 degrees that no edge flip removes (flipping the long edge
+// would make the neighbour worse). Moving the vertex a little toward the middle of its ring removes
+// them, and moving it over its own cluster's faces keeps what makes it that cluster's vertex: it
+// stays on the input surface, inside the region it stands for.
+//
+// One move of vertex v: the target is the mean of its ring's neighbours; the step toward it is
+// restricted to the directions the ring's normals leave free (the eigenvectors of the normal tensor
+// sum area n n^T with small eigenvalues: the tangent plane of a flat ring, the line of a crease,
+// nothing at a corner), so features are not cut; the stepped point goes to a point of v's own
+// cluster's faces (a walk over the cluster from the face under v toward the nearest point); half
+// and quarter steps are tried when the full one is refused. A move is kept only when
+//   * every incident triangle's normal turns by at most `max_normal_turn_deg` (no triangle folds
+//     over its neighbours or turns its back on the surface it approximates), and
+//   * the smallest angle of v's incident triangles stays at or above min(its old value, 35 deg),
+//     and either it grows or the sum of their qualities Q grows (Q as in quality.cpp).
+// A vertex of a triangle below 33 degrees that no such move helps may also step across a feature
+// (tangent to the ring), only if its smallest angle grows and its cluster's corners stay within 1.5x
+// of their old largest distance to its triangles: what the worst triangles on creases and thin
+// parts need (fandisk, the elephant), without cutting features elsewhere.
+// So the mesh's smallest angle never drops below min(its old value, 35 deg). Only vertices on
+// their own cluster's faces move (a qem point off the surface keeps its offset), and only those
+// whose every edge has two consistently oriented triangles (boundaries keep their shape).
+// Connectivity, orientation and the vertex count are never touched.
+//
+// Cost: a pass visits the vertices whose ring moved noticeably in the previous pass (all in the
+// first), each trying up to three points, each a walk of a few faces. Sequential, in vertex order:
+// the result does not depend on threads.
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "meshcvt/coarsen.h"
+#include "meshcvt/error.h"
+#include "symmetric_eigen3.h"
+#include "triangle_bvh.h"
+#include "vec3.h"
+
+namespace meshcvt {
+
+namespace {
+
+// Step fractions tried toward the target, largest first.
+constexpr double kStepFractions[] = {1.0, 0.5, 0.25};
+// A walk over a cluster's faces stops after this many steps (a cluster of thousands of faces).
+constexpr uint32_t kMaxWalkSteps = 256;
+// Eigenvalues of a ring's normal tensor below this fraction of the largest leave their direction
+// free: a ring whose normals spread less than about +-13 degrees around an axis is flat across it.
+constexpr double kFreeEigenvalue = 0.05;
+// A move may lower the smallest incident angle when that stays at or above this (and the ring's Q
+// grows): uniform triangles need give and take, and 35 degrees keeps a margin over the usual
+// 30-degree target. Below it, the smallest angle never drops.
+const double kSafeTan = std::tan(35 * std::numbers::pi / 180);
+// A vertex whose incident triangles have an angle below this may also step across a feature.
+const double kRescueTan = std::tan(33 * std::numbers::pi / 180);
+// A rescue step (across a feature) may let the largest distance from its cluster's corners to the
+// vertex's triangles grow by this factor at most (measured: 1 blocks the elephant's worst triangle,
+// 1.5 keeps Hausdorff within 4% and RMS within 5% even for qem, whose points sit on features).
+constexpr double kRescueErrorGrowth = 1.5;
+// A vertex farther than this fraction of its mean ring edge from its cluster's faces is off the
+// surface (float rounding of a point on a face is about 1e-7 of the coordinates).
+constexpr double kOnSurface = 1e-4;
+// A move shorter than this fraction of the mean ring edge does not wake the neighbours for the
+// next pass: the tail of ever smaller moves would cost passes and change nothing visible.
+constexpr double kWakeFraction = 0.01;
+
+struct Shape {
+  // tan of the smallest angle: the smallest angle of a triangle is at most 60 degrees, where tan
+  // grows with the angle, so comparing it compares angles without an atan2.
+  double min_tan;
+  double q;  // (6 / sqrt 3) area / (semi-perimeter * longest edge), 1 when equilateral
+};
+
+Shape triangle_shape(Vec3 a, Vec3 b, Vec3 c) {
+  const Vec3 ab = b - a, bc = c - b, ca = a - c;
+  const double lab = length(ab), lbc = length(bc), lca = length(ca);
+  const double twice_area = length(cross(ab, bc));
+  // The smallest angle is opposite the shortest edge; its cosine times the two edges beside it:
+  const double adjacent = lab <= lbc && lab <= lca ? -dot(bc, ca)   // at c
+                          : lbc <= lca             ? -dot(ca, ab)   // at a
+                                                   : -dot(ab, bc);  // at b
+  const double min_tan = twice_area > 0 ? (adjacent > 0 ? twice_area / adjacent : INFINITY) : 0.0;
+  const double longest = std::max({lab, lbc, lca});
+  const double denominator = 0.5 * (lab + lbc + lca) * longest;
+  return {min_tan, denominator > 0 ? (3.0 / std::sqrt(3.0)) * twice_area / denominator : 0.0};
+}
+
+Vec3 point_of(const float* p) { return {p[0], p[1], p[2]}; }
+
+}  // namespace
+
+namespace detail {
+
+uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& topology,
+                               const std::vector<uint32_t>& labels, uint32_t passes, double max_normal_turn_deg,
+                               const std::vector<uint32_t>* start_faces) {
+  const size_t n = coarse.vertex_count(), faces = mesh.face_count(), triangles = coarse.face_count();
+  if (labels.size() != faces)
+    throw OptionError("relax: " + std::to_string(labels.size()) + " labels for " + std::to_string(faces) + " faces");
+  for (uint32_t label : labels)
+    if (label >= n) throw OptionError("relax: a label is not below the coarse vertex count " + std::to_string(n));
+  for (uint32_t v : coarse.indices)
+    if (v >= n) throw OptionError("relax: a coarse triangle has a vertex index out of range");
+  for (uint32_t v : mesh.indices)
+    if (v >= mesh.vertex_count()) throw OptionError("relax: a face has a vertex index out of range");
+  if (topology.face_adjacent.size() != mesh.indices.size())
+    throw OptionError("relax: the topology was not built for this mesh");
+  for (uint32_t g : topology.face_adjacent)
+    if (g != kNone && g >= faces) throw OptionError("relax: the topology was not built for this mesh");
+  if (!(max_normal_turn_deg >= 0 && max_normal_turn_deg <= 180))
+    throw OptionError("relax: the normal turn limit must be within [0, 180] degrees");
+  if (passes == 0 || n == 0 || triangles == 0) return 0;
+
+  // Triangles per coarse vertex (CSR).
+  std::vector<uint32_t> ring_offsets(n + 1, 0), ring(3 * triangles);
+  for (uint32_t v : coarse.indices) ++ring_offsets[v + 1];
+  for (size_t i = 0; i < n; ++i) ring_offsets[i + 1] += ring_offsets[i];
+  {
+    std::vector<uint32_t> fill(ring_offsets.begin(), ring_offsets.end() - 1);
+    for (size_t t = 0; t < triangles; ++t)
+      for (int k = 0; k < 3; ++k) ring[fill[coarse.indices[3 * t + k]]++] = uint32_t(t);
+  }
+  // The face each vertex stands on: given, or walked to from its cluster's first face.
+  std::vector<uint32_t> home(n, kNone);
+  bool any_missing = start_faces == nullptr || start_faces->size() != n;
+  if (!any_missing)
+    for (size_t v = 0; v < n; ++v) {
+      const uint32_t f = (*start_faces)[v];
+      if (f < faces && labels[f] == v)
+        home[v] = f;
+      else
+        any_missing = true;
+    }
+  std::vector<uint8_t> walk_home(n, 0);  // 1: home is the cluster's first face, not the one under the vertex
+  if (any_missing)
+    for (size_t f = faces; f-- > 0;)
+      if (home[labels[f]] == kNone || walk_home[labels[f]]) {
+        home[labels[f]] = uint32_t(f);
+        walk_home[labels[f]] = 1;
+      }
+  // Movable: every edge at the vertex has exactly two triangles using it in opposite directions,
+  // no triangle repeats the vertex, it has three or more triangles and its cluster has faces.
+  std::vector<uint8_t> movable(n, 1);
+  {
+    std::vector<uint64_t> half_edges;  // undirected key << 1 | direction
+    half_edges.reserve(3 * triangles);
+    for (size_t t = 0; t < triangles; ++t) {
+      const uint32_t* tri = &coarse.indices[3 * t];
+      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2])
+        for (int k = 0; k < 3; ++k) movable[tri[k]] = 0;
+      for (int k = 0; k < 3; ++k) {
+        uint32_t a = tri[k], b = tri[(k + 1) % 3];
+        uint64_t key = a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a);
+        half_edges.push_back(key << 1 | uint64_t(a < b));
+      }
+    }
+    std::sort(half_edges.begin(), half_edges.end());
+    for (size_t i = 0; i < half_edges.size();) {
+      size_t j = i;
+      while (j < half_edges.size() && half_edges[j] >> 1 == half_edges[i] >> 1) ++j;
+      bool manifold = j - i == 2 && (half_edges[i] & 1) != (half_edges[i + 1] & 1);
+      if (!manifold) {
+        uint64_t key = half_edges[i] >> 1;
+        movable[uint32_t(key >> 32)] = movable[uint32_t(key)] = 0;
+      }
+      i = j;
+    }
+    for (size_t v = 0; v < n; ++v)
+      if (home[v] == kNone || ring_offsets[v + 1] - ring_offsets[v] < 3) movable[v] = 0;
+  }
+
+  // A point of cluster c's faces near q: from the face `home` (in c), step to the edge-neighbour
+  // in c whose closest point to q is nearest while that is strictly nearer, and take the closest
+  // point of the face where it stops. O(steps), no search structure; the closest point of the
+  // cluster unless the cluster folds back toward q (then a point of the cluster nearer the start,
+  // still on its faces). `home` becomes the face where the walk stopped.
+  auto project = [&](uint32_t c, const double q[3], uint32_t& at, double out[3]) {
+    auto distance = [&](uint32_t f, double point[3]) {
+      double corner[3][3];
+      for (int j = 0; j < 3; ++j)
+        for (int d = 0; d < 3; ++d) corner[j][d] = mesh.positions[3 * size_t(mesh.indices[3 * size_t(f) + j]) + d];
+      return closest_point_on_triangle(q, corner[0], corner[1], corner[2], point);
+    };
+    double best = distance(at, out);
+    for (uint32_t steps = 0; steps < kMaxWalkSteps; ++steps) {
+      uint32_t next = kNone;
+      double next_point[3], next_best = best;
+      for (int e = 0; e < 3; ++e) {
+        const uint32_t g = topology.face_adjacent[3 * size_t(at) + e];
+        if (g == kNone || labels[g] != c) continue;
+        double point[3];
+        const double d2 = distance(g, point);
+        if (d2 < next_best) {  // ties: the lower edge index
+          next_best = d2;
+          next = g;
+          for (int d = 0; d < 3; ++d) next_point[d] = point[d];
+        }
+      }
+      if (next == kNone) break;
+      best = next_best;
+      at = next;
+      for (int d = 0; d < 3; ++d) out[d] = next_point[d];
+    }
+  };
+  // Only vertices on their cluster's faces move: a point placed off the surface on purpose (qem at
+  // a curved cluster) keeps the offset that lowers the error, which a move onto the faces would lose.
+  for (uint32_t v = 0; v < n; ++v) {
+    if (!movable[v]) continue;
+    const double p[3] = {coarse.positions[3 * size_t(v)], coarse.positions[3 * size_t(v) + 1],
+                         coarse.positions[3 * size_t(v) + 2]};
+    double onto[3];
+    project(v, p, home[v], onto);
+    double edge_sum = 0;
+    for (uint32_t i = ring_offsets[v]; i < ring_offsets[v + 1]; ++i)
+      for (int k = 0; k < 3; ++k)
+        edge_sum += length(point_of(&coarse.positions[3 * size_t(coarse.indices[3 * size_t(ring[i]) + k])]) -
+                           Vec3{p[0], p[1], p[2]});
+    const double mean_edge = edge_sum / (2.0 * (ring_offsets[v + 1] - ring_offsets[v]));
+    const double off = length(Vec3{onto[0] - p[0], onto[1] - p[1], onto[2] - p[2]});
+    if (!(off <= kOnSurface * mean_edge)) movable[v] = 0;
+  }
+
+  // The corners of cluster c's faces (a flood from `start` over faces of c), for the rescue's
+  // error check. Repeated corners are harmless: only the largest distance is used.
+  std::vector<uint32_t> flood, seen_at(faces, kNone);
+  std::vector<Vec3> cluster_points;
+  auto gather = [&](uint32_t c, uint32_t start) {
+    cluster_points.clear();
+    flood.assign(1, start);
+    seen_at[start] = c;
+    while (!flood.empty()) {
+      const uint32_t f = flood.back();
+      flood.pop_back();
+      for (int k = 0; k < 3; ++k) {
+        cluster_points.push_back(point_of(&mesh.positions[3 * size_t(mesh.indices[3 * size_t(f) + k])]));
+        const uint32_t g = topology.face_adjacent[3 * size_t(f) + k];
+        if (g != kNone && labels[g] == c && seen_at[g] != c) {
+          seen_at[g] = c;
+          flood.push_back(g);
+        }
+      }
+    }
+  };
+  // The largest distance from the cluster's points to the triangles around v with v at `at`: how
+  // far the coarse mesh is from this part of the input, as far as v's move changes it.
+  auto ring_error = [&](uint32_t v, Vec3 at) {
+    double worst = 0;
+    for (const Vec3& x : cluster_points) {
+      const double q[3] = {x.x, x.y, x.z};
+      double nearest = INFINITY;
+      for (uint32_t i = ring_offsets[v]; i < ring_offsets[v + 1] && nearest > worst; ++i) {
+        const uint32_t* tri = &coarse.indices[3 * size_t(ring[i])];
+        double corner[3][3], point[3];
+        for (int j = 0; j < 3; ++j) {
+          const Vec3 y = tri[j] == v ? at : point_of(&coarse.positions[3 * size_t(tri[j])]);
+          corner[j][0] = y.x, corner[j][1] = y.y, corner[j][2] = y.z;
+        }
+        nearest = std::min(nearest, closest_point_on_triangle(q, corner[0], corner[1], corner[2], point));
+      }
+      worst = std::max(worst, nearest);
+    }
+    return worst;
+  };
+
+  const double min_cos = std::cos(max_normal_turn_deg * std::numbers::pi / 180.0);
+  std::vector<uint8_t> active = movable, next_active(n, 0);
+  std::vector<Vec3> old_normals;
+  uint64_t moves = 0;
+  for (uint32_t pass = 0; pass < passes; ++pass) {
+    uint64_t moves_this_pass = 0;
+    bool awake = false;
+    std::fill(next_active.begin(), next_active.end(), uint8_t(0));
+    for (uint32_t v = 0; v < n; ++v) {
+      if (!active[v]) continue;
+      const uint32_t begin = ring_offsets[v], end = ring_offsets[v + 1];
+      const Vec3 p = point_of(&coarse.positions[3 * size_t(v)]);
+      // The other two corners of an incident triangle, in its orientation after v.
+      auto others = [&](uint32_t t, Vec3& b, Vec3& c) {
+        const uint32_t* tri = &coarse.indices[3 * size_t(t)];
+        const int k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+        b = point_of(&coarse.positions[3 * size_t(tri[(k + 1) % 3])]);
+        c = point_of(&coarse.positions[3 * size_t(tri[(k + 2) % 3])]);
+      };
+      double old_min = INFINITY, old_q = 0, edge_sum = 0;  // old_min, new_min: tan of the smallest angle
+      Vec3 target = {0, 0, 0};
+      double tensor[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // sum of area * n n^T over the ring
+      old_normals.clear();
+      for (uint32_t i = begin; i < end; ++i) {
+        Vec3 b, c;
+        others(ring[i], b, c);
+        const Shape s = triangle_shape(p, b, c);
+        old_min = std::min(old_min, s.min_tan);
+        old_q += s.q;
+        edge_sum += length(b - p);
+        // In a closed fan every neighbour is a corner of two triangles: this sums each twice.
+        target = target + 0.5 * (b + c);
+        const Vec3 m = cross(b - p, c - p);
+        const double l = length(m);
+        const Vec3 u = l > 0 ? (1.0 / l) * m : Vec3{0, 0, 0};
+        old_normals.push_back(u);
+        const double e[3] = {u.x, u.y, u.z};
+        for (int r = 0; r < 3; ++r)
+          for (int k = 0; k < 3; ++k) tensor[r][k] += 0.5 * l * e[r] * e[k];
+      }
+      const double count = double(end - begin);
+      target = (1.0 / count) * target;
+      const Vec3 full = target - p;
+      // The directions the ring's normals leave free: both tangent directions on a flat ring, the
+      // crease's direction on a crease, none at a corner. Steps along them keep the ring's shape;
+      // across them they would cut the crease or corner and take the coarse mesh off the input.
+      double values[3], vectors[3][3];
+      symmetric_eigen3(tensor, values, vectors);
+      const double largest = std::max({values[0], values[1], values[2]});
+      if (!(largest > 0)) continue;
+      Vec3 free_step = {0, 0, 0};
+      int stiffest = 0;
+      for (int k = 0; k < 3; ++k) {
+        if (values[k] > values[stiffest]) stiffest = k;
+        const Vec3 axis = {vectors[0][k], vectors[1][k], vectors[2][k]};
+        if (values[k] < kFreeEigenvalue * largest) free_step = free_step + dot(full, axis) * axis;
+      }
+      const Vec3 normal = {vectors[0][stiffest], vectors[1][stiffest], vectors[2][stiffest]};
+      const Vec3 tangent_step = full - dot(full, normal) * normal;
+      // A vertex of a triangle below kRescueAngle may also step across a feature, tangent to the
+      // ring's mean plane, if that lifts its smallest angle: rare, and what it takes on creases.
+      const bool rescue = old_min < kRescueTan;
+      for (int attempt = 0; attempt < (rescue ? 2 : 1); ++attempt) {
+        const Vec3 step = attempt == 0 ? free_step : tangent_step;
+        if (!(dot(step, step) > 0)) continue;
+        double old_error = 0;
+        if (attempt == 1) {
+          gather(v, home[v]);
+          old_error = ring_error(v, p);
+        }
+        bool moved = false;
+        for (double fraction : kStepFractions) {
+          const double q[3] = {p.x + fraction * step.x, p.y + fraction * step.y, p.z + fraction * step.z};
+          uint32_t face = home[v];
+          double onto[3];
+          project(v, q, face, onto);
+          // Judged at the float position it will be stored as.
+          const float stored[3] = {float(onto[0]), float(onto[1]), float(onto[2])};
+          const Vec3 np = point_of(stored);
+          if (np.x == p.x && np.y == p.y && np.z == p.z) break;  // no move left
+          double new_min = INFINITY, new_q = 0;
+          bool folds = false;
+          for (uint32_t i = begin; i < end && !folds; ++i) {
+            Vec3 b, c;
+            others(ring[i], b, c);
+            const Vec3 m = cross(b - np, c - np);
+            const double l = length(m);
+            folds = !(l > 0) || !(dot(m, old_normals[i - begin]) >= min_cos * l);
+            const Shape s = triangle_shape(np, b, c);
+            new_min = std::min(new_min, s.min_tan);
+            new_q += s.q;
+          }
+          if (folds) continue;
+          const bool better = attempt == 0
+                                  ? new_min >= std::min(old_min, kSafeTan) && (new_min > old_min || new_q > old_q)
+                                  : new_min > old_min;
+          if (!better) continue;
+          // Across a feature the move must not take the ring farther from its cluster's points.
+          if (attempt == 1 && ring_error(v, np) > kRescueErrorGrowth * old_error) continue;
+          for (int d = 0; d < 3; ++d) coarse.positions[3 * size_t(v) + d] = stored[d];
+          home[v] = face;
+          ++moves_this_pass;
+          if (length(np - p) >= kWakeFraction * edge_sum / count) {
+            awake = true;
+            for (uint32_t i = begin; i < end; ++i)
+              for (int k = 0; k < 3; ++k) {
+                const uint32_t w = coarse.indices[3 * size_t(ring[i]) + k];
+                next_active[w] = movable[w];
+              }
+          }
+          moved = true;
+          break;
+        }
+        if (moved) break;
+      }
+    }
+    moves += moves_this_pass;
+    if (!awake) break;
+    active.swap(next_active);
+  }
+  return moves;
+}
+
+}  // namespace detail
+
+uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& topology,
+                               const std::vector<uint32_t>& labels, uint32_t passes, double max_normal_turn_deg) {
+  return detail::relax_coarse_vertices(coarse, mesh, topology, labels, passes, max_normal_turn_deg, nullptr);
+}
+
+}  // namespace meshcvt

@@ -1,0 +1,167 @@
+// meshcvt tests: moving coarse vertices over their own clusters to improve triangles
+// (src/coarse_relax.cpp).
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "meshcvt/cluster.h"
+#include "meshcvt/coarsen.h"
+#include "meshcvt/error.h"
+#include "meshcvt/quality.h"
+#include "meshcvt/topology.h"
+#include "test_meshes.h"
+#include "triangle_bvh.h"
+
+using namespace meshcvt;
+
+namespace {
+
+// Distance from point v of `coarse` to the nearest face of `mesh` labelled `cluster`.
+double distance_to_cluster(const Mesh& coarse, uint32_t v, const Mesh& mesh, const std::vector<uint32_t>& labels,
+                           uint32_t cluster) {
+  const double q[3] = {coarse.positions[3 * v], coarse.positions[3 * v + 1], coarse.positions[3 * v + 2]};
+  double best = INFINITY;
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    if (labels[f] != cluster) continue;
+    double corner[3][3], point[3];
+    for (int j = 0; j < 3; ++j)
+      for (int d = 0; d < 3; ++d) corner[j][d] = mesh.positions[3 * mesh.indices[3 * f + j] + d];
+    best = std::min(best, closest_point_on_triangle(q, corner[0], corner[1], corner[2], point));
+  }
+  return std::sqrt(best);
+}
+
+// z of the normal of every triangle of a mesh in the plane z = 0 (positive: counter-clockwise from +z).
+std::vector<double> normal_z(const Mesh& m) {
+  std::vector<double> z;
+  for (size_t t = 0; t < m.face_count(); ++t) {
+    const float* a = &m.positions[3 * m.indices[3 * t]];
+    const float* b = &m.positions[3 * m.indices[3 * t + 1]];
+    const float* c = &m.positions[3 * m.indices[3 * t + 2]];
+    z.push_back(double(b[0] - a[0]) * (c[1] - a[1]) - double(b[1] - a[1]) * (c[0] - a[0]));
+  }
+  return z;
+}
+
+}  // namespace
+
+TEST_CASE("coarse relax: a hexagon whose centre vertex sits off-centre in its cluster gets fat triangles") {
+  // Input: a fine flat grid. Clusters (by face centroid): a disk of radius 0.25 around a regular
+  // hexagon's centre, the rest to the nearest corner. Coarse mesh: the hexagon's fan, the centre
+  // vertex placed inside its own cluster but near one corner, which gives angles below 30 degrees.
+  Mesh input = test::grid(60, 60);
+  const double cx = 0.5, cy = 0.5, radius = 0.3;
+  double site[7][2] = {{cx, cy}};
+  for (int k = 0; k < 6; ++k) {
+    site[k + 1][0] = cx + radius * std::cos(k * std::numbers::pi / 3);
+    site[k + 1][1] = cy + radius * std::sin(k * std::numbers::pi / 3);
+  }
+  std::vector<uint32_t> labels(input.face_count());
+  for (size_t f = 0; f < input.face_count(); ++f) {
+    double gx = 0, gy = 0;
+    for (int j = 0; j < 3; ++j) {
+      gx += input.positions[3 * input.indices[3 * f + j]] / 3;
+      gy += input.positions[3 * input.indices[3 * f + j] + 1] / 3;
+    }
+    uint32_t best = 1;
+    if (std::hypot(gx - cx, gy - cy) < 0.25) best = 0;
+    for (uint32_t s = 2; s < 7 && best != 0; ++s)
+      if (std::hypot(gx - site[s][0], gy - site[s][1]) < std::hypot(gx - site[best][0], gy - site[best][1])) best = s;
+    labels[f] = best;
+  }
+  Mesh coarse;
+  test::add_vertex(coarse, cx + 0.2, cy + 0.03, 0);  // inside the centre disk, near corner 1
+  for (int k = 0; k < 6; ++k) test::add_vertex(coarse, site[k + 1][0], site[k + 1][1], 0);
+  for (uint32_t k = 0; k < 6; ++k) test::add_triangle(coarse, 0, 1 + k, 1 + (k + 1) % 6);
+  REQUIRE(distance_to_cluster(coarse, 0, input, labels, 0) < 1e-6);
+  const TriangleQuality before = triangle_quality(coarse);
+  REQUIRE(before.min_angle_deg < 30);
+
+  Mesh relaxed = coarse;
+  const Topology topology = build_topology(input);
+  CHECK(relax_coarse_vertices(relaxed, input, topology, labels) > 0);
+  const TriangleQuality after = triangle_quality(relaxed);
+  CHECK(after.min_angle_deg >= 30);
+  CHECK(after.q_avg > before.q_avg);
+  // Triangles and vertex count unchanged, orientation kept, the moved vertex on its own cluster.
+  CHECK(relaxed.indices == coarse.indices);
+  CHECK(relaxed.vertex_count() == 7);
+  for (double z : normal_z(relaxed)) CHECK(z > 0);
+  CHECK(distance_to_cluster(relaxed, 0, input, labels, 0) < 1e-6);
+  // The corners are on the boundary: they stay.
+  for (size_t i = 3; i < relaxed.positions.size(); ++i) CHECK(relaxed.positions[i] == coarse.positions[i]);
+  // Deterministic, and 0 passes moves nothing.
+  Mesh again = coarse;
+  relax_coarse_vertices(again, input, topology, labels);
+  CHECK(again.positions == relaxed.positions);
+  Mesh none = coarse;
+  CHECK(relax_coarse_vertices(none, input, topology, labels, 0) == 0);
+  CHECK(none.positions == coarse.positions);
+}
+
+TEST_CASE("coarse relax: on a clustered torus vertices stay on their clusters and the smallest angle never drops") {
+  Mesh input = test::torus(90, 36);
+  Topology topology = build_topology(input);
+  ClusterOptions co;
+  co.clusters = 150;
+  co.threads = 1;
+  Clustering c = cluster(input, topology, co);
+  CoarsenOptions options;
+  options.relax_passes = 0;
+  CoarsenResult r = coarsen_clustering(input, topology, c.labels, co.clusters, options);
+  REQUIRE(r.defects.empty());
+  Mesh relaxed = r.mesh;
+  // One vertex lifted off the surface (as a qem point can be): it must keep its position.
+  relaxed.positions[0] *= 1.05f;
+  const float lifted[3] = {relaxed.positions[0], relaxed.positions[1], relaxed.positions[2]};
+  const TriangleQuality before = triangle_quality(relaxed);
+  const uint64_t moves = relax_coarse_vertices(relaxed, input, topology, c.labels, 3);
+  CHECK(moves > 0);
+  const TriangleQuality after = triangle_quality(relaxed);
+  CHECK(after.min_angle_deg >= std::min(before.min_angle_deg, 35.0) - 1e-9);
+  CHECK(after.q_avg > before.q_avg);
+  CHECK(relaxed.indices == r.mesh.indices);  // topology, orientation and vertex count kept
+  CHECK(relaxed.positions[0] == lifted[0]);
+  CHECK(relaxed.positions[1] == lifted[1]);
+  CHECK(relaxed.positions[2] == lifted[2]);
+  uint32_t moved = 0;
+  for (uint32_t v = 1; v < co.clusters; ++v) {
+    bool same = true;
+    for (int d = 0; d < 3; ++d) same = same && relaxed.positions[3 * v + d] == r.mesh.positions[3 * v + d];
+    if (same) continue;
+    ++moved;
+    CHECK(distance_to_cluster(relaxed, v, input, c.labels, v) < 1e-5);
+  }
+  CHECK(moved > 0);
+
+  // The default job relaxes too: same vertex count, still a clean closed manifold.
+  CoarsenResult job = coarsen_clustering(input, topology, c.labels, co.clusters);
+  CHECK(job.relaxed_moves > 0);
+  CHECK(job.defects.empty());
+  CHECK(job.mesh.vertex_count() == co.clusters);
+  MeshInfo info = mesh_info(job.mesh, build_topology(job.mesh));
+  CHECK(info.euler_characteristic == 0);
+  CHECK(info.boundary_loops == 0);
+  CHECK(info.nonmanifold_edges == 0);
+  CHECK(triangle_quality(job.mesh).min_angle_deg >= std::min(triangle_quality(r.mesh).min_angle_deg, 35.0) - 1e-9);
+}
+
+TEST_CASE("coarse relax: malformed inputs are rejected") {
+  Mesh input = test::grid(4, 4);
+  Topology topology = build_topology(input);
+  Mesh coarse;
+  test::add_vertex(coarse, 0, 0, 0);
+  test::add_vertex(coarse, 1, 0, 0);
+  test::add_vertex(coarse, 0, 1, 0);
+  test::add_triangle(coarse, 0, 1, 2);
+  std::vector<uint32_t> labels(input.face_count(), 0);
+  CHECK_THROWS_AS(relax_coarse_vertices(coarse, input, topology, std::vector<uint32_t>(3, 0)), OptionError);
+  labels[0] = 3;  // not below the coarse vertex count
+  CHECK_THROWS_AS(relax_coarse_vertices(coarse, input, topology, labels), OptionError);
+  labels[0] = 0;
+  CHECK_THROWS_AS(relax_coarse_vertices(coarse, input, Topology{}, labels), OptionError);
+  CHECK(relax_coarse_vertices(coarse, input, topology, labels) == 0);  // boundary vertices only
+}
