@@ -1375,49 +1375,6 @@ ClusterOptions cluster_options(const ApproximateOptions& o, uint32_t clusters) {
 }
 
 
-// Whether repair_connectivity has nothing to do: every cluster is one edge-connected piece and none
-// is enclosed (see enclosed_clusters: no boundary edge, exactly one neighbouring cluster, which has
-// others). The usual case after a topology-preserving run; two passes over the faces, where the
-// repair's own checks (union-find, or a walk per cluster and a sorted cluster graph) cost about 6x
-// as much and were a quarter of every teleport.
-bool nothing_to_repair(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t clusters) {
-  const uint32_t nf = uint32_t(labels.size());
-  // First neighbouring cluster of each cluster, whether it has a second one, whether it is open.
-  std::vector<uint32_t> neighbour(clusters, kNone);
-  std::vector<uint8_t> several(clusters, 0), open(clusters, 0);
-  for (uint32_t f = 0; f < nf; ++f) {
-    const uint32_t l = labels[f];
-    for (int e = 0; e < 3; ++e) {
-      const uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
-      if (o == kNone) {
-        open[l] = 1;
-      } else if (labels[o] != l) {
-        if (neighbour[l] == kNone) neighbour[l] = labels[o];
-        else if (neighbour[l] != labels[o]) several[l] = 1;
-      }
-    }
-  }
-  for (uint32_t c = 0; c < clusters; ++c)
-    if (!open[c] && neighbour[c] != kNone && !several[c] && several[neighbour[c]]) return false;
-  // One walk per piece: a cluster met by a second walk has two pieces.
-  std::vector<uint8_t> visited(nf, 0), walked(clusters, 0);
-  std::vector<uint32_t> walk;
-  for (uint32_t f = 0; f < nf; ++f) {
-    if (visited[f]) continue;
-    const uint32_t l = labels[f];
-    if (walked[l]) return false;
-    walked[l] = 1;
-    visited[f] = 1;
-    walk.assign(1, f);
-    for (size_t head = 0; head < walk.size(); ++head)
-      for (int e = 0; e < 3; ++e) {
-        const uint32_t o = topology.face_adjacent[3 * size_t(walk[head]) + e];
-        if (o != kNone && !visited[o] && labels[o] == l) visited[o] = 1, walk.push_back(o);
-      }
-  }
-  return true;
-}
-
 // Iterate + repair rounds from the iteration's current labels, as cluster() does. Returns the next
 // free round number.
 uint32_t converge(BoundaryIteration& it, const ClusterProblem& problem, const Topology& topology,
@@ -1426,8 +1383,9 @@ uint32_t converge(BoundaryIteration& it, const ClusterProblem& problem, const To
     out.converged = run_iterations(it, o.max_iterations, o.progress, round, out);
     std::vector<uint32_t> current = it.labels();
     std::vector<float> generators = it.generators();
-    bool repaired = !nothing_to_repair(topology, current, problem.clusters) &&
-                    repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair);
+    // (repair_connectivity first checks, in two passes, whether anything needs repairing: the usual
+    // case after a topology-preserving run, and a quarter of every teleport when it did not.)
+    bool repaired = repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair);
     uint32_t restored = restore_cluster_count(problem, topology, generators, current, problem.clusters);
     out.repair.restored_clusters += restored;
     if (!repaired && restored == 0) return round + 1;

@@ -13,6 +13,7 @@
 // the cluster split is one of the emptied cluster's own mesh component).
 #include <algorithm>
 #include <cassert>
+#include <functional>
 #include <numeric>
 #include <utility>
 
@@ -65,22 +66,27 @@ std::vector<uint32_t> isolated_clusters(const Topology& topology, const std::vec
 // boundary, one neighbouring cluster, which has two or more). Clusters are walked in parallel, each
 // worker marking the faces it reaches in a bit set of its own (a face is reached only by its own
 // cluster's walk); the walk also notes the clusters next to each, so no cluster graph is built.
+// Without a pool, the same on the calling thread.
 bool nothing_to_repair(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t clusters,
-                       WorkerPool& pool) {
+                       WorkerPool* pool) {
   const uint32_t nf = uint32_t(labels.size());
+  auto run = [&](size_t count, const std::function<void(size_t, size_t, unsigned)>& fn, size_t min_parallel) {
+    if (pool) pool->run(count, fn, min_parallel);
+    else fn(0, count, 0);
+  };
   const uint32_t* adjacent = topology.face_adjacent.data();
   const uint32_t* label = labels.data();
   // Each cluster's lowest face and size, per worker over its range of faces, then merged.
-  const unsigned workers = pool.size();
+  const unsigned workers = pool ? pool->size() : 1;
   std::vector<uint32_t> worker_first(size_t(workers) * clusters, kNone), worker_size(size_t(workers) * clusters, 0);
-  pool.run(nf, [&](size_t begin, size_t end, unsigned w) {
+  run(nf, [&](size_t begin, size_t end, unsigned w) {
     uint32_t* first = &worker_first[size_t(w) * clusters];
     uint32_t* size = &worker_size[size_t(w) * clusters];
     for (size_t f = begin; f < end; ++f) {
       if (first[label[f]] == kNone) first[label[f]] = uint32_t(f);
       ++size[label[f]];
     }
-  });
+  }, /*min_parallel=*/2048);
   std::vector<uint32_t> first(clusters, kNone), size(clusters, 0);
   for (unsigned w = 0; w < workers; ++w)  // ranges in increasing face order: the first found is the lowest
     for (uint32_t c = 0; c < clusters; ++c) {
@@ -94,7 +100,7 @@ bool nothing_to_repair(const Topology& topology, const std::vector<uint32_t>& la
   // it has a second one.
   std::vector<uint8_t> whole(clusters, 1), open(clusters, 0), several(clusters, 0);
   std::vector<uint32_t> neighbour(clusters, kNone);
-  pool.run(clusters, [&](size_t begin, size_t end, unsigned) {
+  run(clusters, [&](size_t begin, size_t end, unsigned) {
     std::vector<uint64_t> marks((size_t(nf) + 63) / 64, 0);
     uint64_t* mark_bits = marks.data();
     // The walk holds at most the cluster's faces: sized once per cluster, written through a
@@ -143,8 +149,9 @@ bool repair_connectivity(const ClusterProblem& problem, const Topology& topology
                          std::vector<uint32_t>& labels, uint32_t clusters, RepairStats& stats, WorkerPool* pool) {
   const uint32_t nf = problem.face_count;
   // The usual case after a run (the topology-preserving step keeps clusters connected): nothing
-  // split, nothing enclosed, nothing to do; checked in parallel before the serial work below.
-  if (pool && nothing_to_repair(topology, labels, clusters, *pool)) return false;
+  // split, nothing enclosed, nothing to do; checked (in parallel with a pool) before the serial
+  // work below.
+  if (nothing_to_repair(topology, labels, clusters, pool)) return false;
   std::vector<uint32_t> piece = cluster_pieces(topology, labels);
 
   // Largest piece of every cluster, by weight, ties to the lower piece id.
