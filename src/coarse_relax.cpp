@@ -340,7 +340,7 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       }
       const Vec3 normal = {vectors[0][stiffest], vectors[1][stiffest], vectors[2][stiffest]};
       const Vec3 tangent_step = full - dot(full, normal) * normal;
-      // A vertex of a triangle below kRescueAngle may also step across a feature, tangent to the
+      // A vertex of a triangle below kRescueTan (33 degrees) may also step across a feature, tangent to the
       // ring's mean plane, if that lifts its smallest angle: rare, and what it takes on creases.
       const bool rescue = old_min < kRescueTan;
       for (int attempt = 0; attempt < (rescue ? 2 : 1); ++attempt) {
