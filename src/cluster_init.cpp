@@ -169,6 +169,22 @@ constexpr double kL21PositionWeight = 0.01;
 float contraction_cost(const DualGraph& g, uint32_t i, uint32_t j) {
   double wi = g.node_weight(i), wj = g.node_weight(j);
   if (!(wi > 0) || !(wj > 0)) return 0.0f;  // weightless faces merge for free
+  if (!g.faces.problem) {
+    // Stored nodes: with z = S / W, |z_i - z_j|^2 = |S_i w_j - S_j w_i|^2 / (w_i w_j)^2, so
+    // F = |S_i w_j - S_j w_i|^2 / (w_i w_j (w_i + w_j)^2): one division instead of seven
+    // (thirteen for l21), the largest cost of the later levels.
+    const double* si = &g.sum[size_t(g.dims) * i];
+    const double* sj = &g.sum[size_t(g.dims) * j];
+    auto squared = [&](int k) {
+      double d[3];
+      for (int c = 0; c < 3; ++c) d[c] = si[k + c] * wj - sj[k + c] * wi;
+      return d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    };
+    double d2 = squared(0);
+    if (g.dims == 6) d2 += kL21PositionWeight * squared(3);
+    double w = wi + wj;
+    return float(d2 / (wi * wj * (w * w)));
+  }
   double zi[6] = {}, zj[6] = {};  // (zeroed: GCC cannot see that dims entries get written)
   g.node_mean(i, wi, zi);
   g.node_mean(j, wj, zj);
