@@ -84,12 +84,25 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
   // A face closer to its own generator than half the distance to the nearest adjacent generator
   // cannot be closer to another (triangle inequality): most faces need one distance. The bound is
   // shrunk a little so float rounding cannot turn a tie into a skip.
+  // Each cluster's candidates (its neighbours) are also listed with their generators side by
+  // side: the assignment reads them in order rather than through the neighbour ids (a dependent
+  // load per candidate, the largest cost of the assignment on bunny00).
+  struct Candidate {
+    float g[3];
+    uint32_t cluster;
+  };
   std::vector<float> inner_radius2(nc, 0.0f);
+  std::vector<uint32_t> candidate_begin(size_t(nc) + 1, 0);
+  for (uint32_t c = 0; c < nc; ++c) candidate_begin[c + 1] = candidate_begin[c] + count[c];
+  std::vector<Candidate> candidates(candidate_begin[nc]);
   for (uint32_t c = 0; c < nc; ++c) {
     float nearest = -1;
+    Candidate* list = candidates.data() + candidate_begin[c];
     for (uint32_t k = offsets[c]; k < offsets[c] + count[c]; ++k) {
-      float d = squared_distance(&generators[3 * size_t(c)], &generators[3 * size_t(neighbours[k])]);
+      const uint32_t q = neighbours[k];
+      float d = squared_distance(&generators[3 * size_t(c)], &generators[3 * size_t(q)]);
       if (nearest < 0 || d < nearest) nearest = d;
+      *list++ = Candidate{{generators[3 * size_t(q)], generators[3 * size_t(q) + 1], generators[3 * size_t(q) + 2]}, q};
     }
     inner_radius2[c] = nearest < 0 ? 0.0f : 0.25f * nearest * 0.999f;
   }
@@ -105,21 +118,28 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
     float* seed_distance = &worker_distance[size_t(w) * nc];
     uint32_t* seed_face = &worker_seed[size_t(w) * nc];
     int64_t* my_delta = worker_delta.data() + size_t(w) * width;
+    // Raw pointers: through the vectors the compiler reloads their data after every store.
+    const uint32_t* const label = labels.data();
+    const float* const radius2 = inner_radius2.data();
+    const float* const generator = generators.data();
+    const uint32_t* const first_candidate = candidate_begin.data();
+    const Candidate* const candidate = candidates.data();
+    uint32_t* const assigned = out.data();
     int64_t v[kSumComponents];
     for (size_t f = begin; f < end; ++f) {
-      uint32_t own = labels[f], best = own;
-      float best_d = distance(uint32_t(f), own);
-      if (!(best_d < inner_radius2[own])) {
-        for (uint32_t k = offsets[own]; k < offsets[own] + count[own]; ++k) {
-          uint32_t c = neighbours[k];
-          float d = distance(uint32_t(f), c);
-          if (better_destination(d, c, best_d, best)) {
-            best = c;
+      const float* x = point + 3 * f;
+      uint32_t own = label[f], best = own;
+      float best_d = squared_distance(x, generator + 3 * size_t(own));
+      if (!(best_d < radius2[own])) {
+        for (uint32_t k = first_candidate[own]; k < first_candidate[own + 1]; ++k) {
+          float d = squared_distance(x, candidate[k].g);
+          if (better_destination(d, candidate[k].cluster, best_d, best)) {
+            best = candidate[k].cluster;
             best_d = d;
           }
         }
       }
-      out[f] = best;
+      assigned[f] = best;
       if (best != own) {
         problem.face_fixed(uint32_t(f), v);
         for (int k = 0; k < kSumComponents; ++k) {
