@@ -25,6 +25,7 @@
 // so each component gets exactly its count.
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
@@ -32,6 +33,7 @@
 #include <numeric>
 #include <string>
 #include <type_traits>
+#include <utility>
 
 #include "cluster_engine.h"
 #include "meshcvt/error.h"
@@ -58,6 +60,15 @@ class ShrinkingArray {
   ShrinkingArray() = default;
   ShrinkingArray(const ShrinkingArray&) = delete;
   ShrinkingArray& operator=(const ShrinkingArray&) = delete;
+  ShrinkingArray(ShrinkingArray&& other) noexcept { *this = std::move(other); }
+  ShrinkingArray& operator=(ShrinkingArray&& other) noexcept {
+    if (this != &other) {
+      std::free(data_);
+      data_ = std::exchange(other.data_, nullptr);
+      size_ = std::exchange(other.size_, 0);
+    }
+    return *this;
+  }
   ~ShrinkingArray() { std::free(data_); }
 
   // n elements of `value` (the old contents are dropped).
@@ -131,8 +142,6 @@ struct FaceNodes {
     const double w = problem->weight[face(node)];
     for (int c = 0; c < dims; ++c) out[c] *= w;
   }
-
- private:
   uint32_t face(uint32_t node) const { return subset ? (*subset)[node] : node; }
 };
 
@@ -229,16 +238,20 @@ uint64_t edge_key(float cost, uint32_t e) {
 // node (ids given in increasing order of the lowest old id, so results never depend on hashing or
 // threads) and updates the graph in place. The edges' costs are computed in parallel (one per
 // edge, so any split gives the same).
-std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool& pool) {
+std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool* pool) {
   const size_t ne = g.edges.size();
   const int dims = g.dims;
   // Scratch arrays written before they are read are left uninitialized (no zeroing pass: the
   // memsets of value-initialized vectors were 14% of the initialization's instructions).
   // (keys are made from the costs when needed: half the memory of storing them)
   std::unique_ptr<float[]> cost(new float[ne]);
-  pool.run(ne, [&](size_t begin, size_t end, unsigned) {
+  auto cost_range = [&](size_t begin, size_t end, unsigned) {
     for (size_t e = begin; e < end; ++e) cost[e] = contraction_cost(g, g.edges[e].a, g.edges[e].b);
-  });
+  };
+  if (pool)
+    pool->run(ne, cost_range);
+  else
+    cost_range(0, ne, 0);
   auto key = [&](uint32_t e) { return edge_key(cost[e], e); };
 
   // Passes of "mutually cheapest among the still unmatched" grow a matching until it is maximal
@@ -388,20 +401,13 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool& 
   return relabel;
 }
 
-// Clusters the faces listed in `subset` (increasing face ids, a union of whole components) into
-// `clusters` clusters; node i of the graph is face subset[i] and local_of[subset[i]] == i. Returns a
-// label per listed face. A null subset means every face, node i = face i (local_of unused).
-std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology,
-                                              uint32_t clusters, WorkerPool& pool, const std::vector<uint32_t>* subset = nullptr,
-                                              const std::vector<uint32_t>* local_of = nullptr) {
+// The first level's graph: faces as nodes. Node i is face subset[i] (local_of[subset[i]] == i),
+// or face i without a subset. The subset is a union of whole components, or part `part` of
+// `part_of` (then only the edges inside the part are kept).
+DualGraph face_graph(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology,
+                     const std::vector<uint32_t>* subset, const std::vector<uint32_t>* local_of,
+                     const std::vector<uint8_t>* part_of = nullptr, uint8_t part = 0) {
   const uint32_t nf = subset ? uint32_t(subset->size()) : problem.face_count;
-  auto face_of = [&](uint32_t node) { return subset ? (*subset)[node] : node; };
-  if (clusters >= nf) {
-    std::vector<uint32_t> labels(nf);
-    std::iota(labels.begin(), labels.end(), 0u);
-    return labels;
-  }
-
   DualGraph g;
   g.nodes = nf;
   g.dims = problem.metric == Metric::l21 ? 6 : 3;
@@ -413,9 +419,10 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
   for (uint32_t f = 0; f < nf; ++f) {
     const size_t run_start = edge_count;
     for (int e = 0; e < 3; ++e) {
-      uint32_t o = topology.face_adjacent[3 * size_t(face_of(f)) + e];
+      uint32_t o = topology.face_adjacent[3 * size_t(g.faces.face(f)) + e];
       if (o == kNone) continue;
-      if (subset) o = (*local_of)[o];  // a neighbour is in the same component, so in the subset
+      if (part_of && (*part_of)[o] != part) continue;  // another part's face
+      if (subset) o = (*local_of)[o];  // (a component's neighbour is in the same component)
       if (o > f) g.edges[edge_count++] = DualEdge{f, o};
     }
     // in increasing upper end, as every level's edges: an edge's index then ranks it among equal
@@ -423,17 +430,22 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
     sort_by_upper_end(g.edges.begin() + run_start, g.edges.begin() + edge_count);
   }
   g.edges.shrink(edge_count);
+  return g;
+}
 
-  // Level targets: n·2^k, n·2^(k-1), ..., n with n·2^k < F <= n·2^(k+1).
-  std::vector<uint32_t> targets;
-  for (uint64_t t = clusters; t < nf; t *= 2) targets.push_back(uint32_t(t));
-  std::reverse(targets.begin(), targets.end());
-
+// Contracts g level by level down to each of `targets` in turn and returns the composed
+// relabeling (node at entry -> node at the end). When the edges run out before a target, a part
+// (`part`) stops there; the whole graph cannot: an error naming the count. pool: threads for the
+// costs (null: this thread).
+std::vector<uint32_t> contract_levels(DualGraph& g, const std::vector<uint32_t>& targets, WorkerPool* pool, bool part,
+                                      uint32_t clusters) {
   std::vector<std::vector<uint32_t>> relabels;
   for (uint32_t target : targets) {
     while (g.nodes > target) {
-      if (g.edges.empty())
+      if (g.edges.empty()) {
+        if (part) break;
         throw OptionError("cannot make " + std::to_string(clusters) + " connected clusters: the face graph has more components");
+      }
       relabels.push_back(contract_round(g, g.nodes - target, pool));
       // The big early relabelings are folded into the first one at once (one pass over the faces
       // each) rather than kept to the end: 4 bytes per face less at the peak of the rounds.
@@ -444,15 +456,211 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
       }
     }
   }
-  assert(g.nodes == clusters);
+  if (relabels.empty()) {  // nothing to contract
+    std::vector<uint32_t> identity(g.nodes);
+    std::iota(identity.begin(), identity.end(), 0u);
+    return identity;
+  }
   // Compose the rounds' relabelings from the last to the first: O(total nodes), not O(F * rounds).
   for (size_t r = relabels.size(); r-- > 1;) {
     std::vector<uint32_t>& below = relabels[r - 1];
     const std::vector<uint32_t>& above = relabels[r];
     for (uint32_t& id : below) id = above[id];
   }
-  assert(!relabels.empty());  // clusters < nf: at least one round
   return std::move(relabels[0]);
+}
+
+// Parts of the mesh contracted side by side (see hierarchical_clustering): one per this many faces,
+// rounded down to a power of two, at most kMaxParts. The count depends on the face count only,
+// never on the threads, so the result does not either.
+constexpr uint32_t kFacesPerPart = 32768;
+constexpr uint32_t kMaxParts = 4;
+// The parts contract down to the last level of at least this many nodes per cluster; the levels
+// after it run on the whole graph, so that clusters form across the parts' borders.
+constexpr uint64_t kPartNodesPerCluster = 8;
+
+// Splits the faces into `parts` (a power of two) regions of equal face counts by recursive
+// bisection of their centroids across the longest side of each region's box (ties by face id).
+std::vector<uint8_t> spatial_parts(const Mesh& mesh, uint32_t nf, uint32_t parts, WorkerPool& pool) {
+  std::vector<float> centroid(3 * size_t(nf));
+  pool.run(nf, [&](size_t begin, size_t end, unsigned) {
+    for (size_t f = begin; f < end; ++f)
+      for (int c = 0; c < 3; ++c) {
+        float x = 0;
+        for (int k = 0; k < 3; ++k) x += mesh.positions[3 * size_t(mesh.indices[3 * f + k]) + c];
+        centroid[3 * f + c] = x / 3;
+      }
+  });
+  // (coordinate, face) in one integer: the float's bits made to order like its value above the
+  // face id, so that nth_element compares integers (no indirection, ties by face id).
+  auto key = [](float x, uint32_t f) {
+    uint32_t bits;
+    std::memcpy(&bits, &x, sizeof bits);
+    bits ^= (bits >> 31) ? 0xffffffffu : 0x80000000u;
+    return uint64_t(bits) << 32 | f;
+  };
+  std::vector<uint32_t> order(nf);
+  std::iota(order.begin(), order.end(), 0u);
+  std::vector<uint64_t> keys;
+  std::vector<uint8_t> part_of(nf, 0);
+  auto split = [&](auto&& self, size_t begin, size_t end, uint32_t first_part, uint32_t count) -> void {
+    if (count == 1) {
+      for (size_t i = begin; i < end; ++i) part_of[order[i]] = uint8_t(first_part);
+      return;
+    }
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = begin; i < end; ++i)
+      for (int c = 0; c < 3; ++c) {
+        lo[c] = std::min(lo[c], centroid[3 * size_t(order[i]) + c]);
+        hi[c] = std::max(hi[c], centroid[3 * size_t(order[i]) + c]);
+      }
+    int axis = 0;
+    for (int c = 1; c < 3; ++c)
+      if (hi[c] - lo[c] > hi[axis] - lo[axis]) axis = c;
+    keys.resize(end - begin);
+    for (size_t i = begin; i < end; ++i) keys[i - begin] = key(centroid[3 * size_t(order[i]) + axis], order[i]);
+    const size_t half = (end - begin) / 2;
+    std::nth_element(keys.begin(), keys.begin() + long(half), keys.end());
+    for (size_t i = begin; i < end; ++i) order[i] = uint32_t(keys[i - begin]);
+    self(self, begin, begin + half, first_part, count / 2);
+    self(self, begin + half, end, first_part + count / 2, count / 2);
+  };
+  split(split, 0, nf, 0, parts);
+  return part_of;
+}
+
+// A part's result: its faces (increasing ids), its faces' nodes and its graph at the last level it
+// reached.
+struct PartLevel {
+  std::vector<uint32_t> faces;
+  std::vector<uint32_t> node_of;  // per face of the part, in the order of `faces`
+  DualGraph graph;
+};
+
+// Clusters the faces listed in `subset` (increasing face ids, a union of whole components) into
+// `clusters` clusters; node i of the graph is face subset[i] and local_of[subset[i]] == i. Returns a
+// label per listed face. A null subset means every face, node i = face i (local_of unused).
+//
+// The whole mesh is cut into parts (regions of the surface) that run the early levels, the costly
+// ones, each on its own and in parallel, every level's target shared out in proportion to the
+// parts' faces; no contraction crosses a part's border there. The parts' graphs are then joined
+// (the mesh edges between parts become edges between their nodes), brought to that level's exact
+// count and contracted on to n as one graph.
+std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology,
+                                              uint32_t clusters, WorkerPool& pool, const std::vector<uint32_t>* subset = nullptr,
+                                              const std::vector<uint32_t>* local_of = nullptr) {
+  const uint32_t nf = subset ? uint32_t(subset->size()) : problem.face_count;
+  if (clusters >= nf) {
+    std::vector<uint32_t> labels(nf);
+    std::iota(labels.begin(), labels.end(), 0u);
+    return labels;
+  }
+  // Level targets: n·2^k, n·2^(k-1), ..., n with n·2^k < F <= n·2^(k+1).
+  std::vector<uint32_t> targets;
+  for (uint64_t t = clusters; t < nf; t *= 2) targets.push_back(uint32_t(t));
+  std::reverse(targets.begin(), targets.end());
+
+  // The levels the parts run: those down to the last target of at least kPartNodesPerCluster nodes
+  // per cluster (none: no parts).
+  size_t part_levels = 0;
+  while (part_levels < targets.size() && targets[part_levels] >= kPartNodesPerCluster * clusters) ++part_levels;
+  uint32_t parts = 1;
+  if (!subset && part_levels > 0)
+    while (2 * parts <= kMaxParts && uint64_t(2 * parts) * kFacesPerPart <= nf) parts *= 2;
+  if (parts == 1) {
+    DualGraph g = face_graph(problem, mesh, topology, subset, local_of);
+    std::vector<uint32_t> labels = contract_levels(g, targets, &pool, false, clusters);
+    assert(g.nodes == clusters);
+    return labels;
+  }
+
+  const std::vector<uint8_t> part_of = spatial_parts(mesh, nf, parts, pool);
+  std::vector<uint32_t> local(nf);  // a face's place in its part
+  std::vector<PartLevel> levels(parts);
+  for (uint32_t f = 0; f < nf; ++f) {
+    local[f] = uint32_t(levels[part_of[f]].faces.size());
+    levels[part_of[f]].faces.push_back(f);
+  }
+  pool.run(parts, [&](size_t begin, size_t end, unsigned) {
+    for (size_t p = begin; p < end; ++p) {
+      const uint64_t count = levels[p].faces.size();
+      std::vector<uint32_t> part_targets;
+      for (size_t l = 0; l < part_levels; ++l)
+        part_targets.push_back(std::max<uint32_t>(1, uint32_t(uint64_t(targets[l]) * count / nf)));
+      levels[p].graph = face_graph(problem, mesh, topology, &levels[p].faces, &local, &part_of, uint8_t(p));
+      levels[p].node_of = contract_levels(levels[p].graph, part_targets, nullptr, true, clusters);
+      if (!levels[p].graph.faces.problem) std::vector<uint32_t>().swap(levels[p].faces);  // (no longer the graph's nodes)
+    }
+  }, /*min_parallel=*/2);
+
+  // The joined graph: part p's nodes numbered from node_base[p], their sums side by side; the
+  // parts' edges and the mesh edges between parts.
+  const int dims = levels[0].graph.dims;
+  std::vector<uint32_t> node_base(parts + 1, 0);
+  for (uint32_t p = 0; p < parts; ++p) node_base[p + 1] = node_base[p] + levels[p].graph.nodes;
+  const uint32_t nodes = node_base[parts];
+  DualGraph g;
+  g.dims = dims;
+  g.nodes = nodes;
+  g.weight.reset(nodes);
+  g.sum.reset(size_t(dims) * nodes);
+  for (uint32_t p = 0; p < parts; ++p) {
+    DualGraph& part = levels[p].graph;
+    for (uint32_t i = 0; i < part.nodes; ++i) {
+      const uint32_t node = node_base[p] + i;
+      g.weight[node] = part.node_weight(i);
+      if (part.faces.problem)  // a part that did not contract (its nodes are still faces)
+        part.faces.sum(i, dims, &g.sum[size_t(dims) * node]);
+      else
+        for (int c = 0; c < dims; ++c) g.sum[size_t(dims) * node + c] = part.sum[size_t(dims) * i + c];
+    }
+  }
+  auto node_of_face = [&](uint32_t f) { return node_base[part_of[f]] + levels[part_of[f]].node_of[local[f]]; };
+  {
+    // Pairs (lower, upper) by a counting sort on the lower end, duplicates dropped (several mesh
+    // edges join two nodes), each run in increasing upper end: the order every level keeps.
+    std::vector<uint32_t> start(size_t(nodes) + 1, 0);
+    auto for_each_pair = [&](auto&& emit) {
+      for (uint32_t p = 0; p < parts; ++p) {
+        const DualGraph& part = levels[p].graph;
+        for (size_t e = 0; e < part.edges.size(); ++e) emit(node_base[p] + part.edges[e].a, node_base[p] + part.edges[e].b);
+      }
+      for (uint32_t f = 0; f < nf; ++f)
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t o = topology.face_adjacent[3 * size_t(f) + k];
+          if (o == kNone || o < f || part_of[o] == part_of[f]) continue;  // (each pair once, from its lower face)
+          const uint32_t a = node_of_face(f), b = node_of_face(o);
+          emit(std::min(a, b), std::max(a, b));
+        }
+    };
+    for_each_pair([&](uint32_t a, uint32_t) { ++start[a + 1]; });
+    for (uint32_t i = 0; i < nodes; ++i) start[i + 1] += start[i];
+    std::unique_ptr<uint32_t[]> upper(new uint32_t[start[nodes]]);
+    for_each_pair([&](uint32_t a, uint32_t b) { upper[start[a]++] = b; });
+    for (PartLevel& level : levels) level.graph = DualGraph{};  // (their edges are in the list now)
+    g.edges.reset(start[nodes]);
+    std::vector<uint32_t> last_seen(nodes, kNone);
+    size_t kept = 0, from = 0;
+    for (uint32_t a = 0; a < nodes; ++a) {
+      const size_t to = start[a];  // after the fill, start[a] is the end of a's run
+      const size_t run_start = kept;
+      for (; from < to; ++from) {
+        const uint32_t b = upper[from];
+        if (last_seen[b] == a) continue;
+        last_seen[b] = a;
+        g.edges[kept++] = DualEdge{a, b};
+      }
+      sort_by_upper_end(g.edges.begin() + run_start, g.edges.begin() + kept);
+    }
+    g.edges.shrink(kept);
+  }
+  // The parts' level to its exact count, then the rest.
+  std::vector<uint32_t> rest(targets.begin() + long(part_levels) - 1, targets.end());
+  const std::vector<uint32_t> node_label = contract_levels(g, rest, &pool, false, clusters);
+  assert(g.nodes == clusters);
+  std::vector<uint32_t> labels(nf);
+  for (uint32_t f = 0; f < nf; ++f) labels[f] = node_label[node_of_face(f)];
+  return labels;
 }
 
 uint64_t splitmix64(uint64_t& state) {

@@ -268,6 +268,31 @@ TEST_CASE("hierarchical initialization gives exactly n connected clusters") {
     }
 }
 
+TEST_CASE("hierarchical initialization in parts: exactly n connected clusters, same labels for any thread count") {
+  // Over 65536 faces the early levels run in spatial parts side by side (cluster_init.cpp): a
+  // torus and a sphere, so that the parts cut across both and one holds pieces of two components.
+  Mesh m = test::combine(test::torus(300, 120), test::icosphere(5), 3);
+  REQUIRE(m.face_count() >= 65536);
+  Topology t = build_topology(m);
+  const uint32_t nf = uint32_t(m.face_count());
+  for (Metric metric : {Metric::cvt, Metric::l21})
+    for (uint32_t n : {2u, 64u, 1000u}) {
+      CAPTURE(std::string(to_string(metric)));
+      CAPTURE(n);
+      ClusterProblem pr = make_cluster_problem(m, options_for(metric, n));
+      WorkerPool one(1);
+      std::vector<uint32_t> labels = initial_clustering(pr, m, t, Init::hierarchical, n, 1, nullptr, &one);
+      REQUIRE(labels.size() == nf);
+      Pieces pc = count_pieces(t, labels, n);
+      CHECK(pc.nonempty == n);
+      CHECK(pc.pieces == n);
+      for (unsigned threads : {2u, 4u}) {
+        WorkerPool pool(threads);
+        CHECK(initial_clustering(pr, m, t, Init::hierarchical, n, 1, nullptr, &pool) == labels);
+      }
+    }
+}
+
 TEST_CASE("bad cluster counts are clear errors naming the numbers") {
   Mesh two = test::combine(test::icosphere(1), test::icosphere(1), 3);
   ClusterOptions o;
