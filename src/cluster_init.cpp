@@ -501,13 +501,8 @@ std::vector<uint8_t> spatial_parts(const Mesh& mesh, uint32_t nf, uint32_t parts
   };
   std::vector<uint32_t> order(nf);
   std::iota(order.begin(), order.end(), 0u);
-  std::vector<uint64_t> keys;
-  std::vector<uint8_t> part_of(nf, 0);
-  auto split = [&](auto&& self, size_t begin, size_t end, uint32_t first_part, uint32_t count) -> void {
-    if (count == 1) {
-      for (size_t i = begin; i < end; ++i) part_of[order[i]] = uint8_t(first_part);
-      return;
-    }
+  // Range [begin, end) of `order` split at its middle, the lower half below the upper one.
+  auto split = [&](size_t begin, size_t end) {
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = begin; i < end; ++i)
       for (int c = 0; c < 3; ++c) {
@@ -517,15 +512,19 @@ std::vector<uint8_t> spatial_parts(const Mesh& mesh, uint32_t nf, uint32_t parts
     int axis = 0;
     for (int c = 1; c < 3; ++c)
       if (hi[c] - lo[c] > hi[axis] - lo[axis]) axis = c;
-    keys.resize(end - begin);
+    std::vector<uint64_t> keys(end - begin);
     for (size_t i = begin; i < end; ++i) keys[i - begin] = key(centroid[3 * size_t(order[i]) + axis], order[i]);
-    const size_t half = (end - begin) / 2;
-    std::nth_element(keys.begin(), keys.begin() + long(half), keys.end());
+    std::nth_element(keys.begin(), keys.begin() + long((end - begin) / 2), keys.end());
     for (size_t i = begin; i < end; ++i) order[i] = uint32_t(keys[i - begin]);
-    self(self, begin, begin + half, first_part, count / 2);
-    self(self, begin + half, end, first_part + count / 2, count / 2);
   };
-  split(split, 0, nf, 0, parts);
+  // Range r of 2^depth: [r nf / 2^depth, (r + 1) nf / 2^depth); the ranges of one depth in parallel.
+  for (uint32_t ranges = 1; ranges < parts; ranges *= 2)
+    pool.run(ranges, [&](size_t begin, size_t end, unsigned) {
+      for (size_t r = begin; r < end; ++r) split(size_t(nf) * r / ranges, size_t(nf) * (r + 1) / ranges);
+    }, /*min_parallel=*/2);
+  std::vector<uint8_t> part_of(nf);
+  for (uint32_t p = 0; p < parts; ++p)
+    for (size_t i = size_t(nf) * p / parts; i < size_t(nf) * (p + 1) / parts; ++i) part_of[order[i]] = uint8_t(p);
   return part_of;
 }
 
@@ -535,6 +534,8 @@ struct PartLevel {
   std::vector<uint32_t> faces;
   std::vector<uint32_t> node_of;  // per face of the part, in the order of `faces`
   DualGraph graph;
+  // Mesh edges to a later part's face: (this part's node, that face), each pair from its lower face.
+  std::vector<std::pair<uint32_t, uint32_t>> border;
 };
 
 // Clusters the faces listed in `subset` (increasing face ids, a union of whole components) into
@@ -577,6 +578,7 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
   const std::vector<uint8_t> part_of = spatial_parts(mesh, nf, parts, pool);
   std::vector<uint32_t> local(nf);  // a face's place in its part
   std::vector<PartLevel> levels(parts);
+  for (uint32_t p = 0; p < parts; ++p) levels[p].faces.reserve(size_t(nf) * (p + 1) / parts - size_t(nf) * p / parts);
   for (uint32_t f = 0; f < nf; ++f) {
     local[f] = uint32_t(levels[part_of[f]].faces.size());
     levels[part_of[f]].faces.push_back(f);
@@ -589,6 +591,13 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
         part_targets.push_back(std::max<uint32_t>(1, uint32_t(uint64_t(targets[l]) * count / nf)));
       levels[p].graph = face_graph(problem, mesh, topology, &levels[p].faces, &local, &part_of, uint8_t(p));
       levels[p].node_of = contract_levels(levels[p].graph, part_targets, nullptr, true, clusters);
+      for (uint32_t i = 0; i < count; ++i) {
+        const uint32_t f = levels[p].faces[i];
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t o = topology.face_adjacent[3 * size_t(f) + k];
+          if (o != kNone && o > f && part_of[o] != p) levels[p].border.emplace_back(levels[p].node_of[i], o);
+        }
+      }
       if (!levels[p].graph.faces.problem) std::vector<uint32_t>().swap(levels[p].faces);  // (no longer the graph's nodes)
     }
   }, /*min_parallel=*/2);
@@ -625,11 +634,9 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
         const DualGraph& part = levels[p].graph;
         for (size_t e = 0; e < part.edges.size(); ++e) emit(node_base[p] + part.edges[e].a, node_base[p] + part.edges[e].b);
       }
-      for (uint32_t f = 0; f < nf; ++f)
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t o = topology.face_adjacent[3 * size_t(f) + k];
-          if (o == kNone || o < f || part_of[o] == part_of[f]) continue;  // (each pair once, from its lower face)
-          const uint32_t a = node_of_face(f), b = node_of_face(o);
+      for (uint32_t p = 0; p < parts; ++p)
+        for (const auto& [node, o] : levels[p].border) {
+          const uint32_t a = node_base[p] + node, b = node_of_face(o);
           emit(std::min(a, b), std::max(a, b));
         }
     };
@@ -637,7 +644,10 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
     for (uint32_t i = 0; i < nodes; ++i) start[i + 1] += start[i];
     std::unique_ptr<uint32_t[]> upper(new uint32_t[start[nodes]]);
     for_each_pair([&](uint32_t a, uint32_t b) { upper[start[a]++] = b; });
-    for (PartLevel& level : levels) level.graph = DualGraph{};  // (their edges are in the list now)
+    for (PartLevel& level : levels) {  // (their edges are in the list now)
+      level.graph = DualGraph{};
+      std::vector<std::pair<uint32_t, uint32_t>>().swap(level.border);
+    }
     g.edges.reset(start[nodes]);
     std::vector<uint32_t> last_seen(nodes, kNone);
     size_t kept = 0, from = 0;
