@@ -3,6 +3,7 @@
 // clusters, iterating again until the clustering is converged and valid.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <string>
 #include <thread>
@@ -25,16 +26,19 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 constexpr uint32_t kMaxRepairRounds = 8;
 
 // Lloyd steps after initialization stop once one lowers the energy by less than a fraction of it:
-// kLloydMinGain up to kLloydReferenceSize faces per cluster, less above in proportion. Boundary
-// testing needs about one iteration per face layer a border still has to travel, so the more faces
-// per cluster, the longer a global step stays the cheaper way down (measured with momentum 0.8,
-// cluster_flood.cpp, on the 1.2M bunny -> 10k: 0.005 2.16 s, 0.002 1.78 s; the 4.8M bunny -> 10k:
-// 0.002 12.8 s, 0.001 11.4 s, 0.0005 10.1 s; bunny00 -> 1000: 0.002 78 ms, 0.001 86 ms).
+// kLloydMinGain up to kLloydReferenceSize faces per cluster, less above, as (reference / size)^1.5.
+// Boundary testing needs about one iteration per face layer a border still has to travel, so the
+// more faces per cluster, the longer a global step stays the cheaper way down (measured with
+// momentum 0.8, cluster_flood.cpp, on the 1.2M bunny -> 10k: 0.005 2.16 s, 0.002 1.78 s; the 4.8M
+// bunny -> 10k: 0.002 12.8 s, 0.001 11.4 s, 0.0005 10.1 s; bunny00 -> 1000: 0.002 78 ms, 0.001
+// 86 ms). Seventh session, after the faster iteration and initialization, hierarchy + Lloyd +
+// iterations (min, alternating): 4.8M 4.08 s at the linear scaling's 0.00042 (26 steps), 3.90-3.96
+// s at 0.0002 (33 steps); 1.2M and bunny00 the same within noise either way.
 constexpr double kLloydMinGain = 0.002;
 constexpr double kLloydReferenceSize = 100;
 double lloyd_min_gain(uint32_t faces, uint32_t clusters) {
   double faces_per_cluster = double(faces) / std::max<uint32_t>(clusters, 1);
-  return kLloydMinGain * std::min(1.0, kLloydReferenceSize / faces_per_cluster);
+  return kLloydMinGain * std::min(1.0, std::pow(kLloydReferenceSize / faces_per_cluster, 1.5));
 }
 
 // Checks ClusterOptions::component_clusters against the mesh (OptionError naming the numbers).
