@@ -224,49 +224,63 @@ void sort_by_upper_end(DualEdge* first, DualEdge* last) {
   }
 }
 
-// An edge's place in a round's order: its cost's bits above its index. Costs are floats >= 0, whose
-// bits order like their values, so one integer comparison orders edges by cost and breaks ties by
-// index: every comparison has one answer, and a node's cheapest edge is a plain minimum.
-uint64_t edge_key(float cost, uint32_t e) {
+// An edge's place in a round's order is its cost's bits above its index. Costs are floats >= 0,
+// whose bits order like their values, so one integer comparison orders edges by cost and breaks
+// ties by index: every comparison has one answer, and a node's cheapest edge is a plain minimum.
+uint32_t float_bits(float cost) {
   assert(cost >= 0.0f);
   uint32_t bits;
   std::memcpy(&bits, &cost, sizeof bits);
-  return uint64_t(bits) << 32 | e;
+  return bits;
 }
+
+// Scratch arrays of the rounds of one contraction, kept from one round to the next: sizes only fall,
+// so later rounds reuse the first round's pages instead of faulting fresh ones in (on the 4.8M
+// bunny the initialization spent about a third of its time in page faults). The costs' array
+// holds the rebuild's upper ends afterwards, and the matched flags the merge's started flags, so
+// those pairs take no more memory than when each was freed before the next.
+struct RoundScratch {
+  std::vector<uint32_t> cost_bits;  // per edge: the cost's float bits; then the rebuild's upper ends
+  std::vector<uint64_t> best;       // per node: key of its cheapest open edge
+  std::vector<uint8_t> flags;       // per node: matched; then, per new node, started
+  std::vector<uint32_t> chosen, open_edges, start, last_seen;
+};
 
 // One round: contract up to `wanted` mutually cheapest edges. Returns the new node id of every old
 // node (ids given in increasing order of the lowest old id, so results never depend on hashing or
 // threads) and updates the graph in place. The edges' costs are computed in parallel (one per
 // edge, so any split gives the same).
-std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool* pool) {
+std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool* pool, RoundScratch& scratch) {
   const size_t ne = g.edges.size();
   const int dims = g.dims;
-  // Scratch arrays written before they are read are left uninitialized (no zeroing pass: the
-  // memsets of value-initialized vectors were 14% of the initialization's instructions).
   // (keys are made from the costs when needed: half the memory of storing them)
-  std::unique_ptr<float[]> cost(new float[ne]);
+  std::vector<uint32_t>& cost_bits = scratch.cost_bits;
+  cost_bits.resize(ne);  // (no zeroing once the first round has grown it)
   auto cost_range = [&](size_t begin, size_t end, unsigned) {
-    for (size_t e = begin; e < end; ++e) cost[e] = contraction_cost(g, g.edges[e].a, g.edges[e].b);
+    for (size_t e = begin; e < end; ++e) cost_bits[e] = float_bits(contraction_cost(g, g.edges[e].a, g.edges[e].b));
   };
   if (pool)
     pool->run(ne, cost_range);
   else
     cost_range(0, ne, 0);
-  auto key = [&](uint32_t e) { return edge_key(cost[e], e); };
+  auto key = [&](uint32_t e) { return uint64_t(cost_bits[e]) << 32 | e; };
 
   // Passes of "mutually cheapest among the still unmatched" grow a matching until it is maximal
   // (or big enough): the costs stay those of the round's start, so one round does the work of
   // several without recomputing them.
-  std::vector<uint64_t> best(g.nodes, UINT64_MAX);
-  std::vector<uint8_t> matched(g.nodes, 0);
+  std::vector<uint64_t>& best = scratch.best;
+  best.assign(g.nodes, UINT64_MAX);
+  std::vector<uint8_t>& matched = scratch.flags;
+  matched.assign(g.nodes, 0);
   // A matching has at most nodes / 2 edges: written through a pointer, as push_back in the pick
   // loop made the compiler reload the arrays the loop reads after every call.
-  std::unique_ptr<uint32_t[]> chosen(new uint32_t[g.nodes / 2 + 1]);
+  scratch.chosen.resize(g.nodes / 2 + 1);
+  uint32_t* const chosen = scratch.chosen.data();
   size_t chosen_count = 0;
   // The edges still open (both ends unmatched) from the second pass on; the first pass takes every
-  // edge without listing them, and the list made after it holds only the survivors (4 bytes per
-  // edge less at the peak of the initialization).
-  std::vector<uint32_t> open_edges;
+  // edge without listing them, and the list made after it holds only the survivors.
+  std::vector<uint32_t>& open_edges = scratch.open_edges;
+  open_edges.clear();
   auto consider = [&](uint32_t e) {
     const DualEdge edge = g.edges[e];
     const uint64_t k = key(e);
@@ -310,17 +324,11 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool* 
   }
   assert(chosen_count > 0 || ne == 0);
   if (chosen_count > wanted) {  // the cheapest `wanted` (keys are distinct; their order is not needed)
-    std::nth_element(chosen.get(), chosen.get() + wanted, chosen.get() + chosen_count,
+    std::nth_element(chosen, chosen + wanted, chosen + chosen_count,
                      [&](uint32_t x, uint32_t y) { return key(x) < key(y); });
     chosen_count = wanted;
   }
 
-  // The matching's scratch is dead from here on; freed now, it does not add to the peak of the
-  // edge rebuild below (21 bytes per face on the first round).
-  cost.reset();
-  std::vector<uint32_t>().swap(open_edges);
-  std::vector<uint64_t>().swap(best);
-  std::vector<uint8_t>().swap(matched);
 
   // New ids in increasing order of a group's lowest node. relabel first holds, at the lower end a
   // of each chosen edge, its partner b > a (no separate partner array: 4 bytes per face at the
@@ -328,7 +336,6 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool* 
   // number, one below it an id already given (ids never exceed the node that got them).
   std::vector<uint32_t> relabel(g.nodes, kNone);
   for (size_t i = 0; i < chosen_count; ++i) relabel[g.edges[chosen[i]].a] = g.edges[chosen[i]].b;
-  chosen.reset();
   uint32_t next = 0;
   for (uint32_t node = 0; node < g.nodes; ++node) {
     const uint32_t held = relabel[node];
@@ -348,7 +355,8 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool* 
       g.weight.assign(next, 0.0);
       g.sum.assign(dims * size_t(next), 0.0);
     }
-    std::vector<uint8_t> started(next, 0);
+    std::vector<uint8_t>& started = scratch.flags;  // (the matched flags are dead)
+    started.assign(next, 0);
     double scratch[6];
     for (uint32_t node = 0; node < g.nodes; ++node) {
       uint32_t r = relabel[node];
@@ -371,18 +379,20 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool* 
   // New edges without self-loops and without repeats (several mesh edges between two merged
   // clusters), so edge lists shrink with the node count: a counting sort by the lower end, then a
   // "last seen" mark per upper end. O(E + nodes), no comparison sort.
-  std::vector<uint32_t> start(size_t(next) + 1, 0);
+  std::vector<uint32_t>& start = scratch.start;
+  start.assign(size_t(next) + 1, 0);
   for (size_t e = 0; e < ne; ++e) {
     uint32_t a = relabel[g.edges[e].a], b = relabel[g.edges[e].b];
     if (a != b) ++start[std::min(a, b) + 1];
   }
   for (uint32_t i = 0; i < next; ++i) start[i + 1] += start[i];
-  std::unique_ptr<uint32_t[]> upper(new uint32_t[start[next]]);
+  uint32_t* const upper = cost_bits.data();  // (the costs are dead; at most ne pairs)
   for (size_t e = 0; e < ne; ++e) {
     uint32_t a = relabel[g.edges[e].a], b = relabel[g.edges[e].b];
     if (a != b) upper[start[std::min(a, b)]++] = std::max(a, b);
   }
-  std::vector<uint32_t> last_seen(next, kNone);
+  std::vector<uint32_t>& last_seen = scratch.last_seen;
+  last_seen.assign(next, kNone);
   size_t kept = 0, from = 0;
   for (uint32_t a = 0; a < next; ++a) {
     size_t to = start[a];  // after the fill loop, start[a] is the end of a's run
@@ -426,7 +436,7 @@ DualGraph face_graph(const ClusterProblem& problem, const Mesh& mesh, const Topo
       if (o > f) g.edges[edge_count++] = DualEdge{f, o};
     }
     // in increasing upper end, as every level's edges: an edge's index then ranks it among equal
-    // costs as its end ids would (edge_key)
+    // costs as its end ids would (float_bits)
     sort_by_upper_end(g.edges.begin() + run_start, g.edges.begin() + edge_count);
   }
   g.edges.shrink(edge_count);
@@ -440,13 +450,14 @@ DualGraph face_graph(const ClusterProblem& problem, const Mesh& mesh, const Topo
 std::vector<uint32_t> contract_levels(DualGraph& g, const std::vector<uint32_t>& targets, WorkerPool* pool, bool part,
                                       uint32_t clusters) {
   std::vector<std::vector<uint32_t>> relabels;
+  RoundScratch scratch;
   for (uint32_t target : targets) {
     while (g.nodes > target) {
       if (g.edges.empty()) {
         if (part) break;
         throw OptionError("cannot make " + std::to_string(clusters) + " connected clusters: the face graph has more components");
       }
-      relabels.push_back(contract_round(g, g.nodes - target, pool));
+      relabels.push_back(contract_round(g, g.nodes - target, pool, scratch));
       // The big early relabelings are folded into the first one at once (one pass over the faces
       // each) rather than kept to the end: 4 bytes per face less at the peak of the rounds.
       // Sizes only fall, so the folded ones are always a prefix of the rounds.
