@@ -122,7 +122,7 @@ class ShrinkingArray {
 struct FaceNodes {
   const ClusterProblem* problem = nullptr;  // null: the graph's nodes are stored
   const Mesh* mesh = nullptr;
-  const std::vector<uint32_t>* subset = nullptr;  // node i = face (*subset)[i]; null: node i = face i
+  const uint32_t* subset = nullptr;  // node i = face subset[i]; null: node i = face i
 
   double weight(uint32_t node) const { return problem->weight[face(node)]; }
   // dims values: p, then (dims 6) the centroid in normalized coordinates
@@ -142,7 +142,7 @@ struct FaceNodes {
     const double w = problem->weight[face(node)];
     for (int c = 0; c < dims; ++c) out[c] *= w;
   }
-  uint32_t face(uint32_t node) const { return subset ? (*subset)[node] : node; }
+  uint32_t face(uint32_t node) const { return subset ? subset[node] : node; }
 };
 
 struct DualGraph {
@@ -411,13 +411,12 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool* 
   return relabel;
 }
 
-// The first level's graph: faces as nodes. Node i is face subset[i] (local_of[subset[i]] == i),
-// or face i without a subset. The subset is a union of whole components, or part `part` of
-// `part_of` (then only the edges inside the part are kept).
-DualGraph face_graph(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology,
-                     const std::vector<uint32_t>* subset, const std::vector<uint32_t>* local_of,
-                     const std::vector<uint8_t>* part_of = nullptr, uint8_t part = 0) {
-  const uint32_t nf = subset ? uint32_t(subset->size()) : problem.face_count;
+// The first level's graph: faces as nodes. Node i is face subset[i] for i < count
+// (local_of[subset[i]] == i), or face i without a subset. The subset is a union of whole
+// components, or part `part` of `part_of` (then only the edges inside the part are kept).
+DualGraph face_graph(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology, const uint32_t* subset,
+                     uint32_t count, const uint32_t* local_of, const uint8_t* part_of = nullptr, uint8_t part = 0) {
+  const uint32_t nf = subset ? count : problem.face_count;
   DualGraph g;
   g.nodes = nf;
   g.dims = problem.metric == Metric::l21 ? 6 : 3;
@@ -431,8 +430,8 @@ DualGraph face_graph(const ClusterProblem& problem, const Mesh& mesh, const Topo
     for (int e = 0; e < 3; ++e) {
       uint32_t o = topology.face_adjacent[3 * size_t(g.faces.face(f)) + e];
       if (o == kNone) continue;
-      if (part_of && (*part_of)[o] != part) continue;  // another part's face
-      if (subset) o = (*local_of)[o];  // (a component's neighbour is in the same component)
+      if (part_of && part_of[o] != part) continue;  // another part's face
+      if (subset) o = local_of[o];  // (a component's neighbour is in the same component)
       if (o > f) g.edges[edge_count++] = DualEdge{f, o};
     }
     // in increasing upper end, as every level's edges: an edge's index then ranks it among equal
@@ -490,59 +489,95 @@ constexpr uint32_t kMaxParts = 4;
 // after it run on the whole graph, so that clusters form across the parts' borders.
 constexpr uint64_t kPartNodesPerCluster = 8;
 
-// Splits the faces into `parts` (a power of two) regions of equal face counts by recursive
-// bisection of their centroids across the longest side of each region's box (ties by face id).
-std::vector<uint8_t> spatial_parts(const Mesh& mesh, uint32_t nf, uint32_t parts, WorkerPool& pool) {
-  std::vector<float> centroid(3 * size_t(nf));
-  pool.run(nf, [&](size_t begin, size_t end, unsigned) {
-    for (size_t f = begin; f < end; ++f)
-      for (int c = 0; c < 3; ++c) {
-        float x = 0;
-        for (int k = 0; k < 3; ++k) x += mesh.positions[3 * size_t(mesh.indices[3 * f + k]) + c];
-        centroid[3 * f + c] = x / 3;
-      }
-  });
-  // (coordinate, face) in one integer: the float's bits made to order like its value above the
-  // face id, so that nth_element compares integers (no indirection, ties by face id).
-  auto key = [](float x, uint32_t f) {
-    uint32_t bits;
-    std::memcpy(&bits, &x, sizeof bits);
-    bits ^= (bits >> 31) ? 0xffffffffu : 0x80000000u;
-    return uint64_t(bits) << 32 | f;
+// Splits the faces into `parts` (a power of two) regions by recursive bisection of their positions
+// across the longest side of each region's box. A region is cut at the edge of a histogram bin
+// (kSplitBins along the side) nearest to its median: balanced to a fraction of a percent, in a few
+// parallel passes over the faces and no array of its own, where computing every centroid and
+// sorting for the exact median took 122 ms of the 4.8M bunny's initialization (its page faults
+// as much as the sort). Counts are integers, so the cut does not depend on the threads. A face's
+// position: its centroid (the problem's point) for cvt and ccvt, its first corner for l21 (whose
+// point is a normal); either serves to group faces by region.
+constexpr uint32_t kSplitBins = 4096;
+std::vector<uint8_t> spatial_parts(const ClusterProblem& problem, const Mesh& mesh, uint32_t nf, uint32_t parts,
+                                   WorkerPool& pool) {
+  const bool corner = problem.metric == Metric::l21;
+  auto position = [&](size_t f, int c) {
+    return corner ? mesh.positions[3 * size_t(mesh.indices[3 * f]) + c] : problem.point[3 * f + c];
   };
-  std::vector<uint32_t> order(nf);
-  std::iota(order.begin(), order.end(), 0u);
-  // Range [begin, end) of `order` split at its middle, the lower half below the upper one.
-  auto split = [&](size_t begin, size_t end) {
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = begin; i < end; ++i)
-      for (int c = 0; c < 3; ++c) {
-        lo[c] = std::min(lo[c], centroid[3 * size_t(order[i]) + c]);
-        hi[c] = std::max(hi[c], centroid[3 * size_t(order[i]) + c]);
+  const unsigned workers = pool.size();
+  std::vector<uint8_t> part_of(nf, 0);
+  for (uint32_t regions = 1; regions < parts; regions *= 2) {
+    // Each region's box (per worker, then merged: min and max do not depend on the order).
+    std::vector<float> box(size_t(workers) * regions * 6);
+    for (size_t i = 0; i < box.size(); i += 6)
+      for (int c = 0; c < 3; ++c) box[i + c] = INFINITY, box[i + 3 + c] = -INFINITY;
+    pool.run(nf, [&](size_t begin, size_t end, unsigned w) {
+      float* mine = &box[size_t(w) * regions * 6];
+      for (size_t f = begin; f < end; ++f) {
+        float* b = mine + 6 * size_t(part_of[f]);
+        for (int c = 0; c < 3; ++c) {
+          const float x = position(f, c);
+          b[c] = std::min(b[c], x);
+          b[3 + c] = std::max(b[3 + c], x);
+        }
       }
-    int axis = 0;
-    for (int c = 1; c < 3; ++c)
-      if (hi[c] - lo[c] > hi[axis] - lo[axis]) axis = c;
-    std::vector<uint64_t> keys(end - begin);
-    for (size_t i = begin; i < end; ++i) keys[i - begin] = key(centroid[3 * size_t(order[i]) + axis], order[i]);
-    std::nth_element(keys.begin(), keys.begin() + long((end - begin) / 2), keys.end());
-    for (size_t i = begin; i < end; ++i) order[i] = uint32_t(keys[i - begin]);
-  };
-  // Range r of 2^depth: [r nf / 2^depth, (r + 1) nf / 2^depth); the ranges of one depth in parallel.
-  for (uint32_t ranges = 1; ranges < parts; ranges *= 2)
-    pool.run(ranges, [&](size_t begin, size_t end, unsigned) {
-      for (size_t r = begin; r < end; ++r) split(size_t(nf) * r / ranges, size_t(nf) * (r + 1) / ranges);
-    }, /*min_parallel=*/2);
-  std::vector<uint8_t> part_of(nf);
-  for (uint32_t p = 0; p < parts; ++p)
-    for (size_t i = size_t(nf) * p / parts; i < size_t(nf) * (p + 1) / parts; ++i) part_of[order[i]] = uint8_t(p);
+    });
+    std::vector<int> axis(regions, 0);
+    std::vector<float> low(regions), scale(regions);
+    for (uint32_t r = 0; r < regions; ++r) {
+      float lo[3], hi[3];
+      for (int c = 0; c < 3; ++c) {
+        lo[c] = INFINITY, hi[c] = -INFINITY;
+        for (unsigned w = 0; w < workers; ++w) {
+          lo[c] = std::min(lo[c], box[(size_t(w) * regions + r) * 6 + c]);
+          hi[c] = std::max(hi[c], box[(size_t(w) * regions + r) * 6 + 3 + c]);
+        }
+      }
+      for (int c = 1; c < 3; ++c)
+        if (hi[c] - lo[c] > hi[axis[r]] - lo[axis[r]]) axis[r] = c;
+      const float side = hi[axis[r]] - lo[axis[r]];
+      low[r] = lo[axis[r]];
+      scale[r] = side > 0 ? float(kSplitBins) / side : 0.0f;  // (an empty or flat region: one bin)
+    }
+    auto bin = [&](size_t f, uint32_t r) {
+      const float t = (position(f, axis[r]) - low[r]) * scale[r];
+      return std::min(kSplitBins - 1, uint32_t(std::max(0.0f, t)));
+    };
+    std::vector<uint32_t> count(size_t(workers) * regions * kSplitBins, 0);
+    pool.run(nf, [&](size_t begin, size_t end, unsigned w) {
+      uint32_t* mine = &count[size_t(w) * regions * kSplitBins];
+      for (size_t f = begin; f < end; ++f) ++mine[size_t(part_of[f]) * kSplitBins + bin(f, part_of[f])];
+    });
+    // The cut: the first bin of the upper half, where the count below comes nearest to half.
+    std::vector<uint32_t> cut(regions);
+    for (uint32_t r = 0; r < regions; ++r) {
+      std::vector<uint64_t> below(kSplitBins + 1, 0);
+      for (uint32_t b = 0; b < kSplitBins; ++b) {
+        uint64_t c = 0;
+        for (unsigned w = 0; w < workers; ++w) c += count[(size_t(w) * regions + r) * kSplitBins + b];
+        below[b + 1] = below[b] + c;
+      }
+      const uint64_t total = below[kSplitBins];
+      uint32_t best = 1;
+      for (uint32_t b = 1; b < kSplitBins; ++b)
+        if (std::max(below[b], total - below[b]) < std::max(below[best], total - below[best])) best = b;
+      cut[r] = best;
+    }
+    pool.run(nf, [&](size_t begin, size_t end, unsigned) {
+      for (size_t f = begin; f < end; ++f) {
+        const uint32_t r = part_of[f];
+        part_of[f] = uint8_t(2 * r + (bin(f, r) >= cut[r]));
+      }
+    });
+  }
   return part_of;
 }
 
 // A part's result: its faces (increasing ids), its faces' nodes and its graph at the last level it
 // reached.
 struct PartLevel {
-  std::vector<uint32_t> faces;
+  const uint32_t* faces = nullptr;  // (in the parts' shared list)
+  uint32_t count = 0;
   std::vector<uint32_t> node_of;  // per face of the part, in the order of `faces`
   DualGraph graph;
   // Mesh edges to a later part's face: (this part's node, that face), each pair from its lower face.
@@ -580,27 +615,53 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
   if (!subset && part_levels > 0)
     while (2 * parts <= kMaxParts && uint64_t(2 * parts) * kFacesPerPart <= nf) parts *= 2;
   if (parts == 1) {
-    DualGraph g = face_graph(problem, mesh, topology, subset, local_of);
+    DualGraph g = face_graph(problem, mesh, topology, subset ? subset->data() : nullptr, nf,
+                             local_of ? local_of->data() : nullptr);
     std::vector<uint32_t> labels = contract_levels(g, targets, &pool, false, clusters);
     assert(g.nodes == clusters);
     return labels;
   }
 
-  const std::vector<uint8_t> part_of = spatial_parts(mesh, nf, parts, pool);
-  std::vector<uint32_t> local(nf);  // a face's place in its part
+  const std::vector<uint8_t> part_of = spatial_parts(problem, mesh, nf, parts, pool);
+  // Each part's faces in increasing id, and a face's place in its part: counted per worker's
+  // range of faces, then each range writes its faces after those of the ranges before it.
+  // (Both arrays uninitialized: their pages are first touched by the parallel fill, not by a
+  // zeroing pass on one thread.)
+  std::unique_ptr<uint32_t[]> local(new uint32_t[nf]), part_faces(new uint32_t[nf]);
   std::vector<PartLevel> levels(parts);
-  for (uint32_t p = 0; p < parts; ++p) levels[p].faces.reserve(size_t(nf) * (p + 1) / parts - size_t(nf) * p / parts);
-  for (uint32_t f = 0; f < nf; ++f) {
-    local[f] = uint32_t(levels[part_of[f]].faces.size());
-    levels[part_of[f]].faces.push_back(f);
+  {
+    const unsigned workers = pool.size();
+    std::vector<uint32_t> range_count(size_t(workers) * parts, 0);
+    pool.run(nf, [&](size_t begin, size_t end, unsigned w) {
+      for (size_t f = begin; f < end; ++f) ++range_count[size_t(w) * parts + part_of[f]];
+    });
+    std::vector<uint32_t> part_first(parts, 0);  // the part's first place in part_faces
+    for (uint32_t p = 0; p < parts; ++p) {
+      if (p > 0) part_first[p] = part_first[p - 1] + levels[p - 1].count;
+      levels[p].faces = part_faces.get() + part_first[p];
+      for (unsigned w = 0; w < workers; ++w) {
+        const uint32_t c = range_count[size_t(w) * parts + p];
+        range_count[size_t(w) * parts + p] = levels[p].count;  // now the range's first place in the part
+        levels[p].count += c;
+      }
+    }
+    pool.run(nf, [&](size_t begin, size_t end, unsigned w) {
+      uint32_t* next = &range_count[size_t(w) * parts];
+      for (size_t f = begin; f < end; ++f) {
+        const uint8_t p = part_of[f];
+        local[f] = next[p]++;
+        part_faces[part_first[p] + local[f]] = uint32_t(f);
+      }
+    });
   }
   pool.run(parts, [&](size_t begin, size_t end, unsigned) {
     for (size_t p = begin; p < end; ++p) {
-      const uint64_t count = levels[p].faces.size();
+      const uint64_t count = levels[p].count;
       std::vector<uint32_t> part_targets;
       for (size_t l = 0; l < part_levels; ++l)
         part_targets.push_back(std::max<uint32_t>(1, uint32_t(uint64_t(targets[l]) * count / nf)));
-      levels[p].graph = face_graph(problem, mesh, topology, &levels[p].faces, &local, &part_of, uint8_t(p));
+      levels[p].graph = face_graph(problem, mesh, topology, levels[p].faces, levels[p].count, local.get(), part_of.data(),
+                                   uint8_t(p));
       levels[p].node_of = contract_levels(levels[p].graph, part_targets, nullptr, true, clusters);
       for (uint32_t i = 0; i < count; ++i) {
         const uint32_t f = levels[p].faces[i];
@@ -609,7 +670,6 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
           if (o != kNone && o > f && part_of[o] != p) levels[p].border.emplace_back(levels[p].node_of[i], o);
         }
       }
-      if (!levels[p].graph.faces.problem) std::vector<uint32_t>().swap(levels[p].faces);  // (no longer the graph's nodes)
     }
   }, /*min_parallel=*/2);
 
@@ -680,7 +740,9 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
   const std::vector<uint32_t> node_label = contract_levels(g, rest, &pool, false, clusters);
   assert(g.nodes == clusters);
   std::vector<uint32_t> labels(nf);
-  for (uint32_t f = 0; f < nf; ++f) labels[f] = node_label[node_of_face(f)];
+  pool.run(nf, [&](size_t begin, size_t end, unsigned) {
+    for (size_t f = begin; f < end; ++f) labels[f] = node_label[node_of_face(uint32_t(f))];
+  });
   return labels;
 }
 
