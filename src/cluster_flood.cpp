@@ -81,16 +81,16 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
   const unsigned workers = pool.size();
   const size_t width = size_t(nc) * kSumComponents;
 
-  // A face closer to its own generator than half the distance to the nearest adjacent generator
-  // cannot be closer to another (triangle inequality): most faces need one distance. The bound is
-  // shrunk a little so float rounding cannot turn a tie into a skip.
-  // Each cluster's candidates (its neighbours) are also listed with their generators side by
-  // side: the assignment reads them in order rather than through the neighbour ids (a dependent
-  // load per candidate, the largest cost of the assignment on bunny00).
+  // Each cluster's candidates (its neighbours) listed with their generators side by side: the
+  // assignment reads them in order rather than through the neighbour ids (a dependent load per
+  // candidate, the largest cost of the assignment on bunny00).
   struct Candidate {
     float g[3];
     uint32_t cluster;
   };
+  // A face closer to its own generator than half the distance to the nearest adjacent generator
+  // cannot be closer to another (triangle inequality): most faces need one distance. The bound is
+  // shrunk a little so float rounding cannot turn a tie into a skip.
   std::vector<float> inner_radius2(nc, 0.0f);
   std::vector<uint32_t> candidate_begin(size_t(nc) + 1, 0);
   for (uint32_t c = 0; c < nc; ++c) candidate_begin[c + 1] = candidate_begin[c] + count[c];

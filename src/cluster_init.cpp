@@ -234,6 +234,37 @@ uint32_t float_bits(float cost) {
   return bits;
 }
 
+// The edges of `nodes` nodes from pairs (a, b), a != b, that for_each_pair(emit) gives, called twice
+// (to count, then to fill): without repeats (several mesh edges may join two nodes), listed by
+// lower end, each run in increasing upper end (see the first level in hierarchical_clustering). A
+// counting sort by the lower end and a "last seen" mark per upper end: O(pairs + nodes), no
+// comparison sort. `edges` may be the array the pairs are read from (it is written only once both
+// calls are done) if it has room for them; start, upper and last_seen are scratch.
+template <class ForEachPair>
+void unique_edges(uint32_t nodes, const ForEachPair& for_each_pair, ShrinkingArray<DualEdge>& edges,
+                  std::vector<uint32_t>& start, std::vector<uint32_t>& upper, std::vector<uint32_t>& last_seen) {
+  start.assign(size_t(nodes) + 1, 0);
+  for_each_pair([&](uint32_t a, uint32_t b) { ++start[std::min(a, b) + 1]; });
+  for (uint32_t i = 0; i < nodes; ++i) start[i + 1] += start[i];
+  if (upper.size() < start[nodes]) upper.resize(start[nodes]);
+  for_each_pair([&](uint32_t a, uint32_t b) { upper[start[std::min(a, b)]++] = std::max(a, b); });
+  if (edges.size() < start[nodes]) edges.reset(start[nodes]);
+  last_seen.assign(nodes, kNone);
+  size_t kept = 0, from = 0;
+  for (uint32_t a = 0; a < nodes; ++a) {
+    const size_t to = start[a];  // after the fill, start[a] is the end of a's run
+    const size_t run_start = kept;
+    for (; from < to; ++from) {
+      const uint32_t b = upper[from];
+      if (last_seen[b] == a) continue;
+      last_seen[b] = a;
+      edges[kept++] = DualEdge{a, b};
+    }
+    sort_by_upper_end(edges.begin() + run_start, edges.begin() + kept);
+  }
+  edges.shrink(kept);
+}
+
 // Scratch arrays of the rounds of one contraction, kept from one round to the next: sizes only fall,
 // so later rounds reuse the first round's pages instead of faulting fresh ones in (on the 4.8M
 // bunny the initialization spent about a third of its time in page faults). The costs' array
@@ -376,37 +407,14 @@ std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool* 
     g.weight.shrink(next);
     g.sum.shrink(dims * size_t(next));
   }
-  // New edges without self-loops and without repeats (several mesh edges between two merged
-  // clusters), so edge lists shrink with the node count: a counting sort by the lower end, then a
-  // "last seen" mark per upper end. O(E + nodes), no comparison sort.
-  std::vector<uint32_t>& start = scratch.start;
-  start.assign(size_t(next) + 1, 0);
-  for (size_t e = 0; e < ne; ++e) {
-    uint32_t a = relabel[g.edges[e].a], b = relabel[g.edges[e].b];
-    if (a != b) ++start[std::min(a, b) + 1];
-  }
-  for (uint32_t i = 0; i < next; ++i) start[i + 1] += start[i];
-  uint32_t* const upper = cost_bits.data();  // (the costs are dead; at most ne pairs)
-  for (size_t e = 0; e < ne; ++e) {
-    uint32_t a = relabel[g.edges[e].a], b = relabel[g.edges[e].b];
-    if (a != b) upper[start[std::min(a, b)]++] = std::max(a, b);
-  }
-  std::vector<uint32_t>& last_seen = scratch.last_seen;
-  last_seen.assign(next, kNone);
-  size_t kept = 0, from = 0;
-  for (uint32_t a = 0; a < next; ++a) {
-    size_t to = start[a];  // after the fill loop, start[a] is the end of a's run
-    const size_t run_start = kept;
-    for (; from < to; ++from) {
-      uint32_t b = upper[from];
-      if (last_seen[b] == a) continue;
-      last_seen[b] = a;
-      g.edges[kept++] = DualEdge{a, b};
+  // The new edges, without self-loops, so edge lists shrink with the node count. In place (at most
+  // ne of them); the costs' array, dead now, holds the upper ends.
+  unique_edges(next, [&](auto&& emit) {
+    for (size_t e = 0; e < ne; ++e) {
+      const uint32_t a = relabel[g.edges[e].a], b = relabel[g.edges[e].b];
+      if (a != b) emit(a, b);
     }
-    // in increasing upper end (see the first level in hierarchical_clustering)
-    sort_by_upper_end(g.edges.begin() + run_start, g.edges.begin() + kept);
-  }
-  g.edges.shrink(kept);
+  }, g.edges, scratch.start, cost_bits, scratch.last_seen);
   g.nodes = next;
   return relabel;
 }
@@ -697,44 +705,16 @@ std::vector<uint32_t> hierarchical_clustering(const ClusterProblem& problem, con
   }
   auto node_of_face = [&](uint32_t f) { return node_base[part_of[f]] + levels[part_of[f]].node_of[local[f]]; };
   {
-    // Pairs (lower, upper) by a counting sort on the lower end, duplicates dropped (several mesh
-    // edges join two nodes), each run in increasing upper end: the order every level keeps.
-    std::vector<uint32_t> start(size_t(nodes) + 1, 0);
-    auto for_each_pair = [&](auto&& emit) {
+    std::vector<uint32_t> start, upper, last_seen;
+    unique_edges(nodes, [&](auto&& emit) {
       for (uint32_t p = 0; p < parts; ++p) {
         const DualGraph& part = levels[p].graph;
         for (size_t e = 0; e < part.edges.size(); ++e) emit(node_base[p] + part.edges[e].a, node_base[p] + part.edges[e].b);
+        for (const auto& [node, o] : levels[p].border) emit(node_base[p] + node, node_of_face(o));
       }
-      for (uint32_t p = 0; p < parts; ++p)
-        for (const auto& [node, o] : levels[p].border) {
-          const uint32_t a = node_base[p] + node, b = node_of_face(o);
-          emit(std::min(a, b), std::max(a, b));
-        }
-    };
-    for_each_pair([&](uint32_t a, uint32_t) { ++start[a + 1]; });
-    for (uint32_t i = 0; i < nodes; ++i) start[i + 1] += start[i];
-    std::unique_ptr<uint32_t[]> upper(new uint32_t[start[nodes]]);
-    for_each_pair([&](uint32_t a, uint32_t b) { upper[start[a]++] = b; });
-    for (PartLevel& level : levels) {  // (their edges are in the list now)
-      level.graph = DualGraph{};
-      std::vector<std::pair<uint32_t, uint32_t>>().swap(level.border);
-    }
-    g.edges.reset(start[nodes]);
-    std::vector<uint32_t> last_seen(nodes, kNone);
-    size_t kept = 0, from = 0;
-    for (uint32_t a = 0; a < nodes; ++a) {
-      const size_t to = start[a];  // after the fill, start[a] is the end of a's run
-      const size_t run_start = kept;
-      for (; from < to; ++from) {
-        const uint32_t b = upper[from];
-        if (last_seen[b] == a) continue;
-        last_seen[b] = a;
-        g.edges[kept++] = DualEdge{a, b};
-      }
-      sort_by_upper_end(g.edges.begin() + run_start, g.edges.begin() + kept);
-    }
-    g.edges.shrink(kept);
+    }, g.edges, start, upper, last_seen);
   }
+  for (PartLevel& level : levels) level.graph = DualGraph{};
   // The parts' level to its exact count, then the rest.
   std::vector<uint32_t> rest(targets.begin() + long(part_levels) - 1, targets.end());
   const std::vector<uint32_t> node_label = contract_levels(g, rest, &pool, false, clusters);
