@@ -16,7 +16,8 @@
 // without sorting (the paper, too, avoids sorting the big early levels), and the cheapest edge
 // overall always qualifies, so every round makes progress. Only a round that would overshoot the
 // level's exact node count sorts its candidates. Total O(F log F) at worst, in
-// practice a few linear passes over shrinking edge lists.
+// practice a few linear passes over shrinking edge lists. Above 65536 faces the early levels run in
+// 2 or 4 spatial parts side by side, one per thread (hierarchical_clustering says how).
 //
 // Random: seeded region growing (one seed per mesh component first, the rest uniformly at random,
 // grown breadth-first), for comparison.
@@ -236,7 +237,7 @@ uint32_t float_bits(float cost) {
 
 // The edges of `nodes` nodes from pairs (a, b), a != b, that for_each_pair(emit) gives, called twice
 // (to count, then to fill): without repeats (several mesh edges may join two nodes), listed by
-// lower end, each run in increasing upper end (see the first level in hierarchical_clustering). A
+// lower end, each run in increasing upper end (as face_graph lists the first level's). A
 // counting sort by the lower end and a "last seen" mark per upper end: O(pairs + nodes), no
 // comparison sort. `edges` may be the array the pairs are read from (it is written only once both
 // calls are done) if it has room for them; start, upper and last_seen are scratch.
@@ -279,8 +280,8 @@ struct RoundScratch {
 
 // One round: contract up to `wanted` mutually cheapest edges. Returns the new node id of every old
 // node (ids given in increasing order of the lowest old id, so results never depend on hashing or
-// threads) and updates the graph in place. The edges' costs are computed in parallel (one per
-// edge, so any split gives the same).
+// threads) and updates the graph in place. The edges' costs are computed on `pool` when given (one
+// per edge, so any split gives the same; null: this thread, as the parts do).
 std::vector<uint32_t> contract_round(DualGraph& g, uint32_t wanted, WorkerPool* pool, RoundScratch& scratch) {
   const size_t ne = g.edges.size();
   const int dims = g.dims;
@@ -501,8 +502,8 @@ constexpr uint64_t kPartNodesPerCluster = 8;
 // across the longest side of each region's box. A region is cut at the edge of a histogram bin
 // (kSplitBins along the side) nearest to its median: balanced to a fraction of a percent, in a few
 // parallel passes over the faces and no array of its own, where computing every centroid and
-// sorting for the exact median took 122 ms of the 4.8M bunny's initialization (its page faults
-// as much as the sort). Counts are integers, so the cut does not depend on the threads. A face's
+// sorting for the exact median took 122 ms of the 4.8M bunny's initialization (mostly the
+// centroid array: a histogram cut over it took as long). Counts are integers, so the cut does not depend on the threads. A face's
 // position: its centroid (the problem's point) for cvt and ccvt, its first corner for l21 (whose
 // point is a normal); either serves to group faces by region.
 constexpr uint32_t kSplitBins = 4096;
