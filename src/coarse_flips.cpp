@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <unordered_map>
 #include <vector>
 
@@ -42,6 +43,8 @@ double min_angle(Vec3 a, Vec3 b, Vec3 c) {
 
 uint64_t edge_key(uint32_t a, uint32_t b) { return a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a); }
 
+constexpr uint32_t kNeverTested = UINT32_MAX;
+
 }  // namespace
 
 uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg, uint32_t max_passes) {
@@ -54,6 +57,7 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg, uint32_t max_pas
   struct EdgeFaces {
     uint32_t t[2] = {UINT32_MAX, UINT32_MAX};
     uint32_t count = 0;
+    uint32_t tested = kNeverTested;  // flip count when last refused (see the pass loop)
   };
   std::unordered_map<uint64_t, EdgeFaces> edges;
   edges.reserve(nt * 2);
@@ -88,6 +92,22 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg, uint32_t max_pas
         return;
       }
   };
+  // Smallest angle of each triangle, cached: a triangle changes only when one of its edges flips.
+  // min_angle of any rotation of a triangle's corners makes the same three calls, so the cached
+  // value is exactly what the test below would compute. NaN: not known yet.
+  std::vector<double> triangle_min(nt, std::numeric_limits<double>::quiet_NaN());
+  auto cached_min = [&](uint32_t t) {
+    if (std::isnan(triangle_min[t]))
+      triangle_min[t] = min_angle(vertex(tri[3 * t]), vertex(tri[3 * t + 1]), vertex(tri[3 * t + 2]));
+    return triangle_min[t];
+  };
+  // Exact skip of repeated tests: an edge's test reads its two triangles, the valences of its ends
+  // u, v and whether (c, d) is an edge. A flip changes those only for its own four vertices, which
+  // it stamps with the flip count; so an edge refused at flip count T, none of whose u, v, c, d was
+  // stamped since, would be refused again and is not tested (the result is the same as testing
+  // every edge in every pass; later passes cost only the edges near the last pass's flips).
+  std::vector<uint32_t> stamp(mesh.vertex_count(), 0);
+  uint32_t flip_count = 0;
   uint64_t flips = 0;
   for (uint32_t pass = 0; pass < max_passes; ++pass) {
     uint64_t flips_this_pass = 0;
@@ -97,6 +117,14 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg, uint32_t max_pas
       if (it == edges.end() || it->second.count != 2) continue;
       uint32_t t1 = it->second.t[0], t2 = it->second.t[1];
       const uint32_t a = uint32_t(key >> 32), b = uint32_t(key);
+      const uint32_t tested = it->second.tested;
+      if (tested != kNeverTested && stamp[a] <= tested && stamp[b] <= tested) {
+        // The triangles did not change (they contain a and b), so neither did c and d.
+        uint32_t newest = 0;
+        for (int k = 0; k < 3; ++k) newest = std::max({newest, stamp[tri[3 * t1 + k]], stamp[tri[3 * t2 + k]]});
+        if (newest <= tested) continue;
+      }
+      it->second.tested = flip_count;  // refused unless flipped below (then the entry is erased)
       // Orient: t1 holds u -> v, t2 holds v -> u.
       auto directed = [&](uint32_t t, uint32_t from, uint32_t to) {
         for (int k = 0; k < 3; ++k)
@@ -121,9 +149,14 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg, uint32_t max_pas
       Vec3 m1 = normal(c, u, d), m2 = normal(d, v, c), side = {n1.x / l1 + n2.x / l2, n1.y / l1 + n2.y / l2,
                                                              n1.z / l1 + n2.z / l2};
       if (!(dot(m1, side) > 0) || !(dot(m2, side) > 0)) continue;
-      double before = std::min(min_angle(vertex(u), vertex(v), vertex(c)), min_angle(vertex(v), vertex(u), vertex(d)));
-      double after = std::min(min_angle(vertex(c), vertex(u), vertex(d)), min_angle(vertex(d), vertex(v), vertex(c)));
-      if (!(after > before + 1e-9)) continue;
+      // The flip needs min(after) > min(before) + 1e-9, i.e. every new triangle's smallest angle
+      // above the bound: the second is not measured when the first already fails.
+      const double bound = std::min(cached_min(t1), cached_min(t2)) + 1e-9;
+      const double after1 = min_angle(vertex(c), vertex(u), vertex(d));
+      if (!(after1 > bound)) continue;
+      const double after2 = min_angle(vertex(d), vertex(v), vertex(c));
+      if (!(after2 > bound)) continue;
+      triangle_min[t1] = after1, triangle_min[t2] = after2;
       // Flip: t1 = (c, u, d), t2 = (d, v, c).
       tri[3 * t1] = c, tri[3 * t1 + 1] = u, tri[3 * t1 + 2] = d;
       tri[3 * t2] = d, tri[3 * t2 + 1] = v, tri[3 * t2 + 2] = c;
@@ -135,6 +168,8 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg, uint32_t max_pas
       replace(edge_key(u, d), t2, t1);  // was in t2 = (v, u, d), now in t1
       replace(edge_key(v, c), t1, t2);  // was in t1 = (u, v, c), now in t2
       --valence[u], --valence[v], ++valence[c], ++valence[d];
+      ++flip_count;
+      stamp[u] = stamp[v] = stamp[c] = stamp[d] = flip_count;
       order.push_back(new_key);  // tested again later in this pass
       ++flips_this_pass;
     }
