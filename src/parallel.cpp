@@ -42,13 +42,21 @@ void cpu_relax() {
 }
 
 // Polls `done` (cheap, checked often) until it holds or kSpin has passed; returns whether it holds.
-// The first microseconds it only pauses between polls (the usual handoff within an iteration);
-// after that it yields the core between polls, so that on a machine busy with other work
-// (ctest -j, other processes) a polling thread does not hold a core a working thread could use:
-// pure polling made the 1.2M bunny 3x slower beside two busy processes on the 2-core VM.
+// The first few polls only pause (the usual handoff within an iteration takes 0.3-0.4 us); after
+// that it yields the core between polls. Two reasons: on a machine busy with other work (ctest -j,
+// other processes) a polling thread must not hold a core a working thread could use (pure polling
+// made the 1.2M bunny 3x slower beside two busy processes on the 2-core VM), and the scheduler
+// sometimes starts a new worker on the caller's own core and leaves it there for tens of
+// milliseconds (a polling thread always looks cache-hot): then the thread waited for runs only
+// when the poller yields. 4096 pure polls (~100 us) before the first yield made fandisk -> 1000
+// take 17 instead of 8 ms in about half of the runs (both threads on one core, forced with
+// taskset: Lloyd steps 9.6 ms instead of 3.3); 64 polls: 9.5 ms every time, the 1.2M bunny the
+// same within noise (785 vs 787 ms, 747 vs 744 ms).
+constexpr int kPurePolls = 64;
+
 template <class Done>
 bool spin_until(const Done& done) {
-  for (int i = 0; i < 4096; ++i) {
+  for (int i = 0; i < kPurePolls; ++i) {
     if (done()) return true;
     cpu_relax();
   }
