@@ -62,7 +62,7 @@ std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<ui
 // gives one (the face under the vertex; kNone or a missing array: found by a walk).
 uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& topology,
                                const std::vector<uint32_t>& labels, uint32_t passes, double max_normal_turn_deg,
-                               const std::vector<uint32_t>* start_faces);
+                               const std::vector<uint32_t>* start_faces, unsigned threads);
 }  // namespace detail
 
 namespace {
@@ -722,7 +722,7 @@ CoarsenResult coarsen_clustering(const Mesh& mesh, const Topology& topology, con
     result.flipped_edges = flip_coarse_edges(result.mesh, options.flip_max_dihedral_deg);
   if (options.relax_passes > 0 && result.defects.empty()) {
     result.relaxed_moves = detail::relax_coarse_vertices(result.mesh, mesh, topology, labels, options.relax_passes,
-                                                         options.relax_max_normal_turn_deg, &vertex_faces);
+                                                         options.relax_max_normal_turn_deg, &vertex_faces, options.threads);
     if (options.flip_edges && result.relaxed_moves > 0)
       result.flipped_edges += flip_coarse_edges(result.mesh, options.flip_max_dihedral_deg);
   }

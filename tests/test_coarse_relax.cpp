@@ -149,6 +149,37 @@ TEST_CASE("coarse relax: on a clustered torus vertices stay on their clusters an
   CHECK(triangle_quality(job.mesh).min_angle_deg >= std::min(triangle_quality(r.mesh).min_angle_deg, 35.0) - 1e-9);
 }
 
+TEST_CASE("coarse relax: the same positions on 1, 2 and 4 threads, and the pass leaves no vertex off its cluster") {
+  // Enough vertices that each class of the coloring is split over the workers (the pool keeps
+  // small classes on one thread), on a bumpy surface so that moves meet and refuse each other.
+  Mesh input = test::torus(160, 64);
+  for (size_t v = 0; v < input.vertex_count(); ++v)
+    input.positions[3 * v + 2] *= 1.0f + 0.2f * float(std::sin(0.37 * double(v)));
+  Topology topology = build_topology(input);
+  ClusterOptions co;
+  co.clusters = 1200;
+  co.threads = 1;
+  Clustering c = cluster(input, topology, co);
+  CoarsenOptions options;
+  options.relax_passes = 0;
+  options.flip_edges = false;
+  CoarsenResult r = coarsen_clustering(input, topology, c.labels, co.clusters, options);
+  REQUIRE(r.defects.empty());
+  std::vector<Mesh> relaxed;
+  std::vector<uint64_t> moves;
+  for (unsigned threads : {1u, 2u, 4u}) {
+    relaxed.push_back(r.mesh);
+    moves.push_back(relax_coarse_vertices(relaxed.back(), input, topology, c.labels, 3, 20, threads));
+  }
+  CHECK(moves[0] > co.clusters);  // most vertices move, some more than once
+  CHECK(moves[1] == moves[0]);
+  CHECK(moves[2] == moves[0]);
+  CHECK(relaxed[1].positions == relaxed[0].positions);
+  CHECK(relaxed[2].positions == relaxed[0].positions);
+  CHECK(triangle_quality(relaxed[0]).min_angle_deg >= std::min(triangle_quality(r.mesh).min_angle_deg, 35.0) - 1e-9);
+  for (uint32_t v = 0; v < co.clusters; v += 7) CHECK(distance_to_cluster(relaxed[0], v, input, c.labels, v) < 1e-5);
+}
+
 TEST_CASE("coarse relax: malformed inputs are rejected") {
   Mesh input = test::grid(4, 4);
   Topology topology = build_topology(input);

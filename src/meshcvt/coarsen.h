@@ -184,10 +184,11 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg = 25, uint32_t ma
 /// Returns the number of moves kept. A moved vertex lies on its cluster's faces (to float
 /// rounding). Vertex count, topology and orientation are unchanged. Throws OptionError when the
 /// sizes disagree or an index is out of range. Time O(passes x vertices x a few walk steps) plus
-/// O(F) for the rescue's rare cluster scans.
+/// O(F) for the rescue's rare cluster scans. threads: 0 = one per core; vertices that share no
+/// triangle move side by side, in classes (a greedy coloring), so the result does not depend on it.
 uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& topology,
                                const std::vector<uint32_t>& labels, uint32_t passes = 3,
-                               double max_normal_turn_deg = 20);
+                               double max_normal_turn_deg = 20, unsigned threads = 0);
 
 /// Step 1 alone: the coarse vertex of every cluster, 3 floats (x, y, z, input units) per cluster;
 /// (0, 0, 0) for a cluster with no face. The same points coarsen_clustering uses. Inputs and
