@@ -16,11 +16,13 @@
 #include <cassert>
 #include <cmath>
 #include <string>
+#include <thread>
 #include <unordered_set>
 #include <vector>
 
 #include "meshcvt/coarsen.h"
 #include "meshcvt/error.h"
+#include "parallel.h"
 #include "symmetric_eigen3.h"
 #include "triangle_bvh.h"
 
@@ -35,6 +37,8 @@ constexpr double kQemRelativeEigenvalueCutoff = 1e-3;
 // The qem point may leave the cluster's bounding box by this fraction of the box diagonal (a ridge
 // or corner point lies just outside the box of a cluster whose faces stop short of it).
 constexpr double kQemBoxMargin = 0.1;
+// Faces from which `projected` splits its scan over threads (below, starting them costs more).
+constexpr uint32_t kMinParallelProjection = 65536;
 
 }  // namespace
 
@@ -206,43 +210,70 @@ std::vector<float> place_closest(const Mesh& mesh, const std::vector<uint32_t>& 
 // nearer than the cluster's own faces; keeping the vertex on its own cluster is what the dual
 // wants anyway (vertices stay in cluster order, no two clusters trade places).
 std::vector<float> place_projected(const Mesh& mesh, uint32_t clusters, const std::vector<double>& centroids,
-                                   const std::vector<uint32_t>& labels, std::vector<uint32_t>* faces) {
-  std::vector<double> best_distance(clusters, -1.0), best_point(3 * size_t(clusters), 0.0);
-  if (faces) faces->assign(clusters, kNone);
-  for (uint32_t f = 0; f < labels.size(); ++f) {
-    const uint32_t c = labels[f];
-    double corner[3][3];
+                                   const std::vector<uint32_t>& labels, unsigned threads, std::vector<uint32_t>* faces) {
+  // Contiguous ranges of faces side by side (large meshes only: a pool costs its threads' start),
+  // each finding, per cluster, its face of least distance (ties: the lower face id); the ranges'
+  // answers are merged the same way, so the result does not depend on the split.
+  const uint32_t nf = uint32_t(labels.size());
+  const unsigned parts = nf >= kMinParallelProjection ? std::max(1u, threads == 0 ? std::thread::hardware_concurrency() : threads) : 1;
+  std::vector<double> part_distance(size_t(parts) * clusters, -1.0);
+  std::vector<uint32_t> part_face(size_t(parts) * clusters, kNone);
+  auto scan = [&](uint32_t begin, uint32_t end, unsigned part) {
+    double* best_distance = &part_distance[size_t(part) * clusters];
+    uint32_t* best_face = &part_face[size_t(part) * clusters];
+    for (uint32_t f = begin; f < end; ++f) {
+      const uint32_t c = labels[f];
+      double corner[3][3];
+      for (int j = 0; j < 3; ++j)
+        for (int d = 0; d < 3; ++d) corner[j][d] = vertex(mesh, mesh.indices[3 * size_t(f) + j])[d];
+      const double* target = &centroids[3 * size_t(c)];
+      if (best_distance[c] >= 0) {
+        // A face whose bounding sphere (about its centroid) stays farther than the best point so far
+        // cannot be closer: skipped without the point-triangle test (most faces of a cluster, once
+        // one near its centroid has been seen). The bound is shrunk far beyond rounding, so a face
+        // at the same distance is still tested and ties still go to the lower face id.
+        double mid[3], radius2 = 0, gap2 = 0;
+        for (int d = 0; d < 3; ++d) mid[d] = (corner[0][d] + corner[1][d] + corner[2][d]) / 3;
+        for (int j = 0; j < 3; ++j) {
+          double r2 = 0;
+          for (int d = 0; d < 3; ++d) r2 += (corner[j][d] - mid[d]) * (corner[j][d] - mid[d]);
+          radius2 = std::max(radius2, r2);
+        }
+        for (int d = 0; d < 3; ++d) gap2 += (target[d] - mid[d]) * (target[d] - mid[d]);
+        const double gap = std::sqrt(gap2) - std::sqrt(radius2);
+        if (gap > 0 && gap * gap * (1 - 1e-9) > best_distance[c]) continue;
+      }
+      double point[3];
+      const double d2 = closest_point_on_triangle(target, corner[0], corner[1], corner[2], point);
+      if (best_distance[c] < 0 || d2 < best_distance[c]) {  // ties: the lower face id
+        best_distance[c] = d2;
+        best_face[c] = f;
+      }
+    }
+  };
+  std::vector<uint32_t> bounds(parts + 1);
+  for (unsigned p = 0; p <= parts; ++p) bounds[p] = uint32_t(uint64_t(nf) * p / parts);
+  run_ranges(bounds, scan);
+  // Part p's faces all come after part p-1's: a strictly smaller distance wins, a tie keeps the earlier.
+  for (unsigned p = 1; p < parts; ++p)
+    for (uint32_t c = 0; c < clusters; ++c) {
+      const double d = part_distance[size_t(p) * clusters + c];
+      if (d >= 0 && (part_distance[c] < 0 || d < part_distance[c])) {
+        part_distance[c] = d;
+        part_face[c] = part_face[size_t(p) * clusters + c];
+      }
+    }
+  if (faces) faces->assign(part_face.begin(), part_face.begin() + clusters);
+  std::vector<float> positions(3 * size_t(clusters), 0.0f);
+  for (uint32_t i = 0; i < clusters; ++i) {
+    const uint32_t f = part_face[i];
+    if (f == kNone) continue;
+    double corner[3][3], point[3];
     for (int j = 0; j < 3; ++j)
       for (int d = 0; d < 3; ++d) corner[j][d] = vertex(mesh, mesh.indices[3 * size_t(f) + j])[d];
-    const double* target = &centroids[3 * size_t(c)];
-    if (best_distance[c] >= 0) {
-      // A face whose bounding sphere (about its centroid) stays farther than the best point so far
-      // cannot be closer: skipped without the point-triangle test (most faces of a cluster, once
-      // one near its centroid has been seen). The bound is shrunk far beyond rounding, so a face
-      // at the same distance is still tested and ties still go to the lower face id.
-      double mid[3], radius2 = 0, gap2 = 0;
-      for (int d = 0; d < 3; ++d) mid[d] = (corner[0][d] + corner[1][d] + corner[2][d]) / 3;
-      for (int j = 0; j < 3; ++j) {
-        double r2 = 0;
-        for (int d = 0; d < 3; ++d) r2 += (corner[j][d] - mid[d]) * (corner[j][d] - mid[d]);
-        radius2 = std::max(radius2, r2);
-      }
-      for (int d = 0; d < 3; ++d) gap2 += (target[d] - mid[d]) * (target[d] - mid[d]);
-      const double gap = std::sqrt(gap2) - std::sqrt(radius2);
-      if (gap > 0 && gap * gap * (1 - 1e-9) > best_distance[c]) continue;
-    }
-    double point[3];
-    double d2 = closest_point_on_triangle(&centroids[3 * size_t(c)], corner[0], corner[1], corner[2], point);
-    if (best_distance[c] < 0 || d2 < best_distance[c]) {  // ties: the lower face id
-      best_distance[c] = d2;
-      if (faces) (*faces)[c] = f;
-      for (int d = 0; d < 3; ++d) best_point[3 * size_t(c) + d] = point[d];
-    }
+    closest_point_on_triangle(&centroids[3 * size_t(i)], corner[0], corner[1], corner[2], point);
+    for (int d = 0; d < 3; ++d) positions[3 * size_t(i) + d] = float(point[d]);
   }
-  std::vector<float> positions(3 * size_t(clusters), 0.0f);
-  for (uint32_t i = 0; i < clusters; ++i)
-    if (best_distance[i] >= 0)
-      for (int d = 0; d < 3; ++d) positions[3 * size_t(i) + d] = float(best_point[3 * size_t(i) + d]);
   return positions;
 }
 
@@ -343,14 +374,14 @@ namespace detail {
 std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
                                           VertexPlacement placement, const std::vector<float>* face_weights,
                                           const std::vector<uint32_t>& vertex_cluster,
-                                          const std::vector<double>& centroids, unsigned /*threads*/,
+                                          const std::vector<double>& centroids, unsigned threads,
                                           std::vector<uint32_t>* faces) {
   if (faces) faces->clear();  // unknown unless the placement knows it
   switch (placement) {
     case VertexPlacement::closest:
       return place_closest(mesh, labels, clusters, centroids, vertex_cluster);
     case VertexPlacement::projected:
-      return place_projected(mesh, clusters, centroids, labels, faces);
+      return place_projected(mesh, clusters, centroids, labels, threads, faces);
     case VertexPlacement::qem:
       return place_qem(mesh, labels, clusters, centroids, face_weights);
   }

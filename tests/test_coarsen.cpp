@@ -724,26 +724,27 @@ TEST_CASE("coarsen: projected placement lies on the surface, closest to the cent
 }
 
 TEST_CASE("coarsen: the result does not depend on the thread count") {
-  // 51200 faces: large enough for the two-thread path. Blocks of 10 x 10 quads, one annulus.
-  Labeled g = grid(160, 160, [](int i, int j) {
+  // 72200 faces: large enough for the parallel paths (the dual's two halves from 50000 faces, the
+  // projected placement's split scan from 65536). Blocks of 10 x 10 quads, one annulus.
+  Labeled g = grid(190, 190, [](int i, int j) {
     int bi = i / 10, bj = j / 10;
     if (std::max(std::abs(bi - 8), std::abs(bj - 8)) == 1) return 0u;  // a ring of 8 blocks
-    return uint32_t(bj * 16 + bi);
+    return uint32_t(bj * 19 + bi);
   });
-  REQUIRE(g.mesh.face_count() >= 50000);
+  REQUIRE(g.mesh.face_count() >= 65536);
   Topology topology = build_topology(g.mesh);
-  for (VertexPlacement placement : {VertexPlacement::closest, VertexPlacement::qem}) {
+  for (VertexPlacement placement : {VertexPlacement::closest, VertexPlacement::projected, VertexPlacement::qem}) {
     CoarsenOptions one, many;
     one.placement = many.placement = placement;
     one.threads = 1;
-    many.threads = 0;
-    CoarsenResult a = coarsen_clustering(g.mesh, topology, g.labels, 256, one);
-    CoarsenResult b = coarsen_clustering(g.mesh, topology, g.labels, 256, many);
+    many.threads = 3;  // three parts even on a one-core machine
+    CoarsenResult a = coarsen_clustering(g.mesh, topology, g.labels, 361, one);
+    CoarsenResult b = coarsen_clustering(g.mesh, topology, g.labels, 361, many);
     CHECK(a.mesh.positions == b.mesh.positions);
     CHECK(a.mesh.indices == b.mesh.indices);
     CHECK(a.defects == b.defects);
     CHECK(has_defect(a.defects, DualDefect::cluster_not_disk, 0));
-    CHECK(a.mesh.face_count() > 300);
+    CHECK(a.mesh.face_count() > 500);
   }
 }
 
