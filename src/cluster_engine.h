@@ -112,9 +112,11 @@ std::vector<uint32_t> enclosed_clusters(const ClusterGraph& graph);
 
 /// Lloyd steps by constrained flooding (cluster_flood.cpp): at most `max_steps`, each kept only if it
 /// lowers the energy, stopping once a step gains less than `min_relative_gain` of the energy.
-/// Clusters stay non-empty and connected. Returns the number of steps kept.
+/// Clusters stay non-empty and connected. Returns the number of steps kept. final_graph
+/// (optional): receives the cluster graph of the final labels.
 uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topology, WorkerPool& pool,
-                           std::vector<uint32_t>& labels, uint32_t max_steps, double min_relative_gain);
+                           std::vector<uint32_t>& labels, uint32_t max_steps, double min_relative_gain,
+                           ClusterGraph* final_graph = nullptr);
 
 /// One engine running the boundary-testing iteration: the CPU's BoundaryIteration below, or the
 /// GPU's (host/). Both must take exactly the same decisions; the driver in cluster.cpp does the rest

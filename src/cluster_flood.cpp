@@ -397,8 +397,12 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
 }  // namespace
 
 uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topology, WorkerPool& pool,
-                           std::vector<uint32_t>& labels, uint32_t max_steps, double min_relative_gain) {
-  if (problem.clusters == 0 || max_steps == 0) return 0;
+                           std::vector<uint32_t>& labels, uint32_t max_steps, double min_relative_gain,
+                           ClusterGraph* final_graph) {
+  if (problem.clusters == 0 || max_steps == 0) {
+    if (final_graph) build_cluster_graph(topology, labels, problem.clusters, *final_graph, &pool);
+    return 0;
+  }
   std::vector<int64_t> sums = compute_cluster_sums(problem, labels, problem.clusters, &pool);
   std::vector<float> generators = generators_of(problem, sums);
   double energy = total_energy(problem, sums, generators);
@@ -450,6 +454,7 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
     ++kept;
     if (gain < min_relative_gain) break;
   }
+  if (final_graph) *final_graph = std::move(graph);
   return kept;
 }
 

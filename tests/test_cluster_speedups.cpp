@@ -182,6 +182,7 @@ TEST_CASE("relabel: the same iterations as a reset to the new labels, fewer face
 // trunk) the cluster to split can be a cap with a band around it; halves grown from its tip and
 // its far rim gave back a cap enclosed by a band, dissolved again by the next repair, until the
 // round limit (not converged). Halves grown from two faces of its border cannot enclose each other.
+// Here the enclosed clusters are the initialization's: dissolved before the first iteration.
 TEST_CASE("restoring n after dissolving an enclosed cluster does not enclose it again") {
   Mesh m = scanned_elephant();
   Topology t = build_topology(m);
@@ -193,7 +194,9 @@ TEST_CASE("restoring n after dissolving an enclosed cluster does not enclose it 
       Clustering c = cluster(m, t, o);
       CHECK(c.repair.dissolved_isolated > 0);  // the case this test is about does occur
       CHECK(c.converged);
-      CHECK(c.repair.rounds <= 2);
+      // The enclosed clusters come from the initialization: they are dissolved (and n restored)
+      // before the iteration, so it converges once and the final repair finds nothing.
+      CHECK(c.repair.rounds == 0);
       CHECK(check_clusters(t, c.labels, n).ok());
     }
   }
