@@ -46,6 +46,25 @@ std::vector<double> normal_z(const Mesh& m) {
   return z;
 }
 
+// A mesh clustered on one thread and its dual before any relaxing (flips optional).
+struct UnrelaxedDual {
+  Clustering clustering;
+  CoarsenResult coarse;
+};
+UnrelaxedDual unrelaxed_dual(const Mesh& input, const Topology& topology, uint32_t clusters, bool flip_edges) {
+  ClusterOptions co;
+  co.clusters = clusters;
+  co.threads = 1;
+  UnrelaxedDual d;
+  d.clustering = cluster(input, topology, co);
+  CoarsenOptions options;
+  options.relax_passes = 0;
+  options.flip_edges = flip_edges;
+  d.coarse = coarsen_clustering(input, topology, d.clustering.labels, clusters, options);
+  REQUIRE(d.coarse.defects.empty());
+  return d;
+}
+
 }  // namespace
 
 TEST_CASE("coarse relax: a hexagon whose centre vertex sits off-centre in its cluster gets fat triangles") {
@@ -105,14 +124,8 @@ TEST_CASE("coarse relax: a hexagon whose centre vertex sits off-centre in its cl
 TEST_CASE("coarse relax: on a clustered torus vertices stay on their clusters and the smallest angle never drops") {
   Mesh input = test::torus(90, 36);
   Topology topology = build_topology(input);
-  ClusterOptions co;
-  co.clusters = 150;
-  co.threads = 1;
-  Clustering c = cluster(input, topology, co);
-  CoarsenOptions options;
-  options.relax_passes = 0;
-  CoarsenResult r = coarsen_clustering(input, topology, c.labels, co.clusters, options);
-  REQUIRE(r.defects.empty());
+  const uint32_t clusters = 150;
+  const auto& [c, r] = unrelaxed_dual(input, topology, clusters, /*flip_edges=*/true);
   Mesh relaxed = r.mesh;
   // One vertex lifted off the surface (as a qem point can be): it must keep its position.
   relaxed.positions[0] *= 1.05f;
@@ -128,7 +141,7 @@ TEST_CASE("coarse relax: on a clustered torus vertices stay on their clusters an
   CHECK(relaxed.positions[1] == lifted[1]);
   CHECK(relaxed.positions[2] == lifted[2]);
   uint32_t moved = 0;
-  for (uint32_t v = 1; v < co.clusters; ++v) {
+  for (uint32_t v = 1; v < clusters; ++v) {
     bool same = true;
     for (int d = 0; d < 3; ++d) same = same && relaxed.positions[3 * v + d] == r.mesh.positions[3 * v + d];
     if (same) continue;
@@ -138,10 +151,10 @@ TEST_CASE("coarse relax: on a clustered torus vertices stay on their clusters an
   CHECK(moved > 0);
 
   // The default job relaxes too: same vertex count, still a clean closed manifold.
-  CoarsenResult job = coarsen_clustering(input, topology, c.labels, co.clusters);
+  CoarsenResult job = coarsen_clustering(input, topology, c.labels, clusters);
   CHECK(job.relaxed_moves > 0);
   CHECK(job.defects.empty());
-  CHECK(job.mesh.vertex_count() == co.clusters);
+  CHECK(job.mesh.vertex_count() == clusters);
   MeshInfo info = mesh_info(job.mesh, build_topology(job.mesh));
   CHECK(info.euler_characteristic == 0);
   CHECK(info.boundary_loops == 0);
@@ -156,28 +169,21 @@ TEST_CASE("coarse relax: the same positions on 1, 2 and 4 threads, and the pass 
   for (size_t v = 0; v < input.vertex_count(); ++v)
     input.positions[3 * v + 2] *= 1.0f + 0.2f * float(std::sin(0.37 * double(v)));
   Topology topology = build_topology(input);
-  ClusterOptions co;
-  co.clusters = 1200;
-  co.threads = 1;
-  Clustering c = cluster(input, topology, co);
-  CoarsenOptions options;
-  options.relax_passes = 0;
-  options.flip_edges = false;
-  CoarsenResult r = coarsen_clustering(input, topology, c.labels, co.clusters, options);
-  REQUIRE(r.defects.empty());
+  const uint32_t clusters = 1200;
+  const auto& [c, r] = unrelaxed_dual(input, topology, clusters, /*flip_edges=*/false);
   std::vector<Mesh> relaxed;
   std::vector<uint64_t> moves;
   for (unsigned threads : {1u, 2u, 4u}) {
     relaxed.push_back(r.mesh);
     moves.push_back(relax_coarse_vertices(relaxed.back(), input, topology, c.labels, 3, 20, threads));
   }
-  CHECK(moves[0] > co.clusters);  // most vertices move, some more than once
+  CHECK(moves[0] > clusters);  // most vertices move, some more than once
   CHECK(moves[1] == moves[0]);
   CHECK(moves[2] == moves[0]);
   CHECK(relaxed[1].positions == relaxed[0].positions);
   CHECK(relaxed[2].positions == relaxed[0].positions);
   CHECK(triangle_quality(relaxed[0]).min_angle_deg >= std::min(triangle_quality(r.mesh).min_angle_deg, 35.0) - 1e-9);
-  for (uint32_t v = 0; v < co.clusters; v += 7) CHECK(distance_to_cluster(relaxed[0], v, input, c.labels, v) < 1e-5);
+  for (uint32_t v = 0; v < clusters; v += 7) CHECK(distance_to_cluster(relaxed[0], v, input, c.labels, v) < 1e-5);
 }
 
 TEST_CASE("coarse relax: malformed inputs are rejected") {
