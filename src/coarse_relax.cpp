@@ -211,7 +211,7 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
     double best = distance(at, out);
     for (uint32_t steps = 0; steps < kMaxWalkSteps; ++steps) {
       uint32_t next = kNone;
-      double next_point[3], next_best = best;
+      double next_point[3] = {0, 0, 0}, next_best = best;
       for (int e = 0; e < 3; ++e) {
         const uint32_t g = topology.face_adjacent[3 * size_t(at) + e];
         if (g == kNone || labels[g] != c) continue;
