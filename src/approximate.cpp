@@ -256,8 +256,14 @@ void check_meshing_options(const MeshingOptions& o) {
 
 // Regrows every region as a shelling (see the file comment) and gives the faces left over new
 // region ids. Returns the new region count; appends split_region fixes.
+// changed (optional, one flag per region): only the flagged regions are regrown. A region that
+// came out of this function and whose faces did not change since regrows into all of its faces
+// (the same seed, and the same pops in the same order: the faces it left over before were never
+// accepted, so they never changed a stamp), so skipping it changes nothing; the meshing passes
+// after a split pass only the split regions (3.5 of bunny00's 22 ms per pass).
 uint32_t make_disk_regions(const Mesh& mesh, const Topology& topology, const FaceGeometry& g,
-                           std::vector<uint32_t>& labels, uint32_t regions, std::vector<MeshingFix>& fixes) {
+                           std::vector<uint32_t>& labels, uint32_t regions, std::vector<MeshingFix>& fixes,
+                           const std::vector<uint8_t>* changed = nullptr) {
   const uint32_t nf = uint32_t(labels.size());
   std::vector<uint32_t> vertex_stamp(mesh.vertex_count(), 0), face_stamp(nf, 0);
   uint32_t stamp = 0;
@@ -307,7 +313,7 @@ uint32_t make_disk_regions(const Mesh& mesh, const Topology& topology, const Fac
   uint32_t count = regions;
   std::vector<uint32_t> members, component_queue;
   for (uint32_t r = 0; r < regions; ++r) {
-    if (first_face[r] == kNone) continue;
+    if (first_face[r] == kNone || (changed && !(*changed)[r])) continue;
     // Work list of (region id, its faces): the region itself, then the pieces split off it.
     members.assign(region_faces.begin() + face_offsets[r], region_faces.begin() + face_offsets[r + 1]);
     std::vector<std::pair<uint32_t, std::vector<uint32_t>>> work;
@@ -1759,8 +1765,12 @@ ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topolog
     for (const MeshingFix& f : out.fixes)
       if (f.kind == MeshingFix::flipped_triangles) curved.push_back(f.region);
     if (curved.empty() || pass + 1 >= kMaxSplitPasses) break;
+    const uint32_t before = count;
     count = split_by_normals(topology, geom, proxies, labels, count, curved, MeshingFix::split_curved, partition_fixes);
-    count = make_disk_regions(mesh, topology, geom, labels, count, partition_fixes);
+    std::vector<uint8_t> changed(count, 0);  // the split regions and their new halves
+    for (uint32_t r : curved) changed[r] = 1;
+    std::fill(changed.begin() + before, changed.end(), uint8_t(1));
+    count = make_disk_regions(mesh, topology, geom, labels, count, partition_fixes, &changed);
   }
   out.regions = count;
   out.labels = std::move(labels);
