@@ -133,8 +133,8 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
 
   Clustering out;
   out.device_notice = choice.notice;
-  ClusterProblem problem = make_cluster_problem(mesh, options);
   WorkerPool pool(options.threads);
+  ClusterProblem problem = make_cluster_problem(mesh, options, &pool);
   std::unique_ptr<IterationEngine> engine;
   if (choice.use_gpu)
     engine = make_gpu_iteration(problem, mesh, topology, options.topology, options.accelerate, choice.device_index);

@@ -67,8 +67,10 @@ struct ClusterProblem {
   }
 };
 
-/// Builds the per-face data. Throws OptionError for bad density arrays.
-ClusterProblem make_cluster_problem(const Mesh& mesh, const ClusterOptions& options);
+/// Builds the per-face data. Throws OptionError for bad density arrays. pool (optional): the
+/// per-face work in parallel ranges (the same result: each face's values are its own, and the
+/// total weight is still added up in face order).
+ClusterProblem make_cluster_problem(const Mesh& mesh, const ClusterOptions& options, WorkerPool* pool = nullptr);
 
 /// Sums of every cluster from scratch. pool (optional): workers add up ranges of faces, and the
 /// integer partial sums are added, so the result is the same for any thread count.

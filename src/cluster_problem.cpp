@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <functional>
 #include <string>
 
 #include "cluster_engine.h"
@@ -12,7 +13,7 @@
 
 namespace meshcvt {
 
-ClusterProblem make_cluster_problem(const Mesh& mesh, const ClusterOptions& options) {
+ClusterProblem make_cluster_problem(const Mesh& mesh, const ClusterOptions& options, WorkerPool* pool) {
   ClusterProblem pr;
   pr.metric = options.metric;
   pr.clusters = options.clusters;
@@ -22,6 +23,19 @@ ClusterProblem make_cluster_problem(const Mesh& mesh, const ClusterOptions& opti
   if (!options.density.empty() && options.density.size() != nf)
     throw OptionError("density has " + std::to_string(options.density.size()) + " values for " + std::to_string(nf) +
                       " faces");
+  // Checked before the parallel part, so the message names the first bad face whatever the threads.
+  for (size_t f = 0; f < options.density.size(); ++f) {
+    const double rho = double(options.density[f]);
+    if (!(rho > 0) || !std::isfinite(rho))
+      throw OptionError("density of face " + std::to_string(f) + " is " + std::to_string(rho) + "; it must be > 0");
+  }
+  // The per-face (per-vertex) loops below: each index writes only its own values.
+  auto for_ranges = [&](size_t count, const std::function<void(size_t, size_t, unsigned)>& fn) {
+    if (pool)
+      pool->run(count, fn);
+    else
+      fn(0, count, 0);
+  };
 
   // Normalize: bounding box into [0,1]^3 with one uniform scale.
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -35,39 +49,42 @@ ClusterProblem make_cluster_problem(const Mesh& mesh, const ClusterOptions& opti
   if (!(extent > 0) || !std::isfinite(extent)) extent = 1;
   for (int c = 0; c < 3; ++c) pr.origin[c] = nv ? lo[c] : 0;
   pr.extent = extent;
-  double inv = 1.0 / double(extent);
+  const double inv = 1.0 / double(extent);
 
   pr.point.resize(3 * nf);
   pr.weight.resize(nf);
-  if (pr.metric == Metric::ccvt) pr.normalized_positions.resize(3 * nv);
-  for (size_t v = 0; v < nv && pr.metric == Metric::ccvt; ++v)
-    for (int c = 0; c < 3; ++c)
-      pr.normalized_positions[3 * v + c] = float((double(mesh.positions[3 * v + c]) - pr.origin[c]) * inv);
-
-  double total = 0;
-  for (size_t f = 0; f < nf; ++f) {
-    double p[3][3];
-    for (int j = 0; j < 3; ++j) {
-      uint32_t v = mesh.indices[3 * f + j];
-      for (int c = 0; c < 3; ++c) p[j][c] = (double(mesh.positions[3 * v + c]) - pr.origin[c]) * inv;
-    }
-    double e1[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-    double e2[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-    double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    double rho = options.density.empty() ? 1.0 : double(options.density[f]);
-    if (!(rho > 0) || !std::isfinite(rho))
-      throw OptionError("density of face " + std::to_string(f) + " is " + std::to_string(rho) + "; it must be > 0");
-    float w = float(0.5 * len * rho);
-    pr.weight[f] = w;
-    total += w;
-    for (int c = 0; c < 3; ++c) {
-      if (pr.metric == Metric::l21)
-        pr.point[3 * f + c] = len > 0 ? float(n[c] / len) : 0.0f;
-      else
-        pr.point[3 * f + c] = float((p[0][c] + p[1][c] + p[2][c]) / 3.0);
-    }
+  if (pr.metric == Metric::ccvt) {
+    pr.normalized_positions.resize(3 * nv);
+    for_ranges(nv, [&](size_t first, size_t last, unsigned) {
+      for (size_t v = first; v < last; ++v)
+        for (int c = 0; c < 3; ++c)
+          pr.normalized_positions[3 * v + c] = float((double(mesh.positions[3 * v + c]) - pr.origin[c]) * inv);
+    });
   }
+
+  for_ranges(nf, [&](size_t first, size_t last, unsigned) {
+    for (size_t f = first; f < last; ++f) {
+      double p[3][3];
+      for (int j = 0; j < 3; ++j) {
+        uint32_t v = mesh.indices[3 * f + j];
+        for (int c = 0; c < 3; ++c) p[j][c] = (double(mesh.positions[3 * v + c]) - pr.origin[c]) * inv;
+      }
+      double e1[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+      double e2[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+      double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+      double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      double rho = options.density.empty() ? 1.0 : double(options.density[f]);
+      pr.weight[f] = float(0.5 * len * rho);
+      for (int c = 0; c < 3; ++c) {
+        if (pr.metric == Metric::l21)
+          pr.point[3 * f + c] = len > 0 ? float(n[c] / len) : 0.0f;
+        else
+          pr.point[3 * f + c] = float((p[0][c] + p[1][c] + p[2][c]) / 3.0);
+      }
+    }
+  });
+  double total = 0;  // in face order, as it always was: fixed_scale below depends on it
+  for (size_t f = 0; f < nf; ++f) total += pr.weight[f];
   if (!(total > 0)) throw OptionError("the mesh has zero total area: nothing to cluster");
   // Every sum is bounded by 3 * total weight (|p|^2 <= 3 in the unit box; 1 for normals).
   pr.fixed_scale = std::ldexp(1.0, 61 - int(std::ceil(std::log2(3.0 * total))));

@@ -306,6 +306,14 @@ TEST_CASE("bad cluster counts are clear errors naming the numbers") {
   o.metric = Metric::cvt;
   o.density.assign(3, 1.0f);
   CHECK_THROWS_AS(cluster(two, o), OptionError);
+  // A bad density names its first bad face, whatever the thread count.
+  o.density.assign(two.face_count(), 1.0f);
+  o.density[97] = 0.0f;
+  o.density[131] = -1.0f;
+  for (unsigned threads : {1u, 4u}) {
+    o.threads = threads;
+    CHECK_THROWS_WITH_AS(cluster(two, o), doctest::Contains("density of face 97 "), OptionError);
+  }
 }
 
 TEST_CASE("final guarantees: exactly n connected, non-isolated clusters, every face labeled") {
