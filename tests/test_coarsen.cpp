@@ -724,7 +724,7 @@ TEST_CASE("coarsen: projected placement lies on the surface, closest to the cent
 }
 
 TEST_CASE("coarsen: the result does not depend on the thread count") {
-  // 72200 faces: large enough for the parallel paths (the dual's two halves from 50000 faces, the
+  // 72200 faces: large enough for the parallel paths (the dual's two halves from 8192 faces, the
   // projected placement's split scan from 65536). Blocks of 10 x 10 quads, one annulus.
   Labeled g = grid(190, 190, [](int i, int j) {
     int bi = i / 10, bj = j / 10;
