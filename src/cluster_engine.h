@@ -80,6 +80,8 @@ std::vector<int64_t> compute_cluster_sums(const ClusterProblem& problem, const s
 /// Generator of one cluster from its sums (cvt: mass centroid; ccvt: closest mesh point to it;
 /// l21: normalized S). Empty clusters (W = 0) keep `g` unchanged. Bit-identical wherever it runs.
 void compute_generator(const ClusterProblem& problem, const int64_t sums[kSumComponents], float g[3]);
+/// compute_generator for every cluster of `sums` (kSumComponents per cluster): 3 floats per cluster.
+std::vector<float> generators_of(const ClusterProblem& problem, const std::vector<int64_t>& sums);
 
 /// Energy of one cluster from its sums and generator: Q - 2 g.S + |g|^2 W, in double.
 double cluster_energy(const ClusterProblem& problem, const int64_t sums[kSumComponents], const float g[3]);

@@ -44,12 +44,6 @@ double total_energy(const ClusterProblem& problem, const std::vector<int64_t>& s
   return e;
 }
 
-std::vector<float> generators_of(const ClusterProblem& problem, const std::vector<int64_t>& sums) {
-  std::vector<float> g(3 * size_t(problem.clusters), 0.0f);
-  for (uint32_t c = 0; c < problem.clusters; ++c) compute_generator(problem, &sums[size_t(c) * kSumComponents], &g[3 * c]);
-  return g;
-}
-
 // Per-worker lists of voronoi_step that keep their capacity from one step to the next.
 struct StepScratch {
   std::vector<std::vector<uint64_t>> marks;   // kept faces, a bit set per worker

@@ -142,6 +142,13 @@ void compute_generator(const ClusterProblem& problem, const int64_t sums[kSumCom
   }
 }
 
+std::vector<float> generators_of(const ClusterProblem& problem, const std::vector<int64_t>& sums) {
+  const size_t clusters = sums.size() / kSumComponents;
+  std::vector<float> g(3 * clusters, 0.0f);
+  for (size_t c = 0; c < clusters; ++c) compute_generator(problem, &sums[c * kSumComponents], &g[3 * c]);
+  return g;
+}
+
 double cluster_energy(const ClusterProblem& problem, const int64_t sums[kSumComponents], const float g[3]) {
   if (sums[0] <= 0) return 0;
   double gx = g[0], gy = g[1], gz = g[2];
@@ -152,8 +159,7 @@ double cluster_energy(const ClusterProblem& problem, const int64_t sums[kSumComp
 
 double labeling_energy(const ClusterProblem& problem, const std::vector<uint32_t>& labels, uint32_t clusters) {
   std::vector<int64_t> sums = compute_cluster_sums(problem, labels, clusters);
-  std::vector<float> g(size_t(clusters) * 3, 0.0f);
-  for (uint32_t c = 0; c < clusters; ++c) compute_generator(problem, &sums[size_t(c) * kSumComponents], &g[3 * c]);
+  const std::vector<float> g = generators_of(problem, sums);
   double e = 0;
   for (uint32_t f = 0; f < problem.face_count; ++f) {
     const float* p = &problem.point[3 * f];

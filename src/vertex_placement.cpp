@@ -40,6 +40,12 @@ constexpr double kQemBoxMargin = 0.1;
 // Faces from which `projected` splits its scan over threads (below, starting them costs more).
 constexpr uint32_t kMinParallelProjection = 65536;
 
+// The corners of face f in double.
+void face_corners(const Mesh& mesh, uint32_t f, double corner[3][3]) {
+  for (int j = 0; j < 3; ++j)
+    for (int d = 0; d < 3; ++d) corner[j][d] = mesh.positions[3 * size_t(mesh.indices[3 * size_t(f) + j]) + d];
+}
+
 }  // namespace
 
 namespace detail {
@@ -224,8 +230,7 @@ std::vector<float> place_projected(const Mesh& mesh, uint32_t clusters, const st
     for (uint32_t f = begin; f < end; ++f) {
       const uint32_t c = labels[f];
       double corner[3][3];
-      for (int j = 0; j < 3; ++j)
-        for (int d = 0; d < 3; ++d) corner[j][d] = vertex(mesh, mesh.indices[3 * size_t(f) + j])[d];
+      face_corners(mesh, f, corner);
       const double* target = &centroids[3 * size_t(c)];
       if (best_distance[c] >= 0) {
         // A face whose bounding sphere (about its centroid) stays farther than the best point so far
@@ -269,8 +274,7 @@ std::vector<float> place_projected(const Mesh& mesh, uint32_t clusters, const st
     const uint32_t f = part_face[i];
     if (f == kNone) continue;
     double corner[3][3], point[3];
-    for (int j = 0; j < 3; ++j)
-      for (int d = 0; d < 3; ++d) corner[j][d] = vertex(mesh, mesh.indices[3 * size_t(f) + j])[d];
+    face_corners(mesh, f, corner);
     closest_point_on_triangle(&centroids[3 * size_t(i)], corner[0], corner[1], corner[2], point);
     for (int d = 0; d < 3; ++d) positions[3 * size_t(i) + d] = float(point[d]);
   }
