@@ -35,7 +35,7 @@
 // a class move side by side on the worker pool, and the result is that of moving them one after
 // the other, class by class, so it does not depend on the thread count. (Until the eighth session
 // the pass went in plain vertex order on one thread: 73 of the 200 ms of coarsening the 1.2M bunny
-// -> 10k. The order changes single moves, not the quality: Table 1's rows moved by at most 0.2
+// -> 10k. The order changes single moves, not the quality: Table 1's rows moved by at most 0.3
 // degrees of minimum angle.)
 #include <algorithm>
 #include <cassert>
