@@ -268,6 +268,33 @@ TEST_CASE("hierarchical initialization gives exactly n connected clusters") {
     }
 }
 
+TEST_CASE("hierarchical initialization balances cluster weights where triangle sizes vary") {
+  // A grid whose last tenth of columns is 21x wider: 70% of the area in 10% of the faces. One
+  // matching per halving level gives clusters of about equal face counts, so the wide side's
+  // clusters came out up to 4.6x the mean weight and the narrow side's down to 0.11x
+  // (cluster_init.cpp, kBalancedRoundFraction). The weights should follow the area instead.
+  const uint32_t nx = 96, ny = 96;
+  Mesh m = test::grid(nx, ny);
+  for (size_t v = 0; v < m.vertex_count(); ++v) {
+    const double x = m.positions[3 * v];
+    m.positions[3 * v] = float(x + 20 * std::max(0.0, x - 0.9));
+  }
+  Topology t = build_topology(m);
+  for (uint32_t n : {16u, 64u}) {
+    CAPTURE(n);
+    ClusterProblem pr = make_cluster_problem(m, options_for(Metric::cvt, n));
+    std::vector<uint32_t> labels = initial_clustering(pr, m, t, Init::hierarchical, n, 1);
+    std::vector<double> weight(n, 0.0);
+    double total = 0;
+    for (uint32_t f = 0; f < pr.face_count; ++f) weight[labels[f]] += pr.weight[f], total += pr.weight[f];
+    const double mean = total / n;
+    CAPTURE(*std::max_element(weight.begin(), weight.end()) / mean);
+    CAPTURE(*std::min_element(weight.begin(), weight.end()) / mean);
+    CHECK(*std::max_element(weight.begin(), weight.end()) <= 2.5 * mean);
+    CHECK(*std::min_element(weight.begin(), weight.end()) >= 0.25 * mean);
+  }
+}
+
 TEST_CASE("hierarchical initialization in parts: exactly n connected clusters, same labels for any thread count") {
   // Over 65536 faces the early levels run in spatial parts side by side (cluster_init.cpp): a
   // torus and a sphere, so that the parts cut across both and one holds pieces of two components.
