@@ -460,10 +460,11 @@ DualGraph face_graph(const ClusterProblem& problem, const Mesh& mesh, const Topo
 // cluster) contract at most kBalancedRoundFraction of their nodes per round, with the costs
 // recomputed in between: light nodes, cheap to merge, merge again within the level while heavy
 // ones wait, as in a global priority queue (Garland et al.). Every level still ends at its exact
-// count. 4.8M bunny: heaviest cluster 2.0x the mean, 22 Lloyd steps, energy at convergence
-// -1.2%; the 1.2M bunny -2.5%. (0.25 and 0.35 left a tail of light clusters on the sphere or the
-// bunny, 0.2-0.35 of the mean: measured in bench/RESULTS.md.) Not for l21, whose regions should
-// differ in size (flat parts large): there it raised the distortion by up to 20%.
+// count. 4.8M bunny: heaviest cluster 3.0x the mean, 24 Lloyd steps, energy at convergence
+// -1.2%; the 1.2M bunny -2.5%. (0.25 and 0.35 each left light clusters somewhere: 0.13x the mean
+// on the 131k sphere with 0.25, 0.06x on the 4.8M bunny with 0.35, and the latter 48 Lloyd steps;
+// bench/RESULTS.md.) Not for l21, whose regions should differ in size (flat parts large): there
+// it raised the distortion by up to 20%.
 constexpr double kBalancedRoundFraction = 0.3;
 constexpr uint64_t kBalancedLevelsNodesPerCluster = 8;
 
