@@ -193,9 +193,10 @@ class BoundaryIteration final : public IterationEngine {
   std::vector<uint64_t> active_bits_;        // one bit per face: marked for active_ (cleared once listed)
   std::vector<uint32_t> destination_;     // per face: proposed cluster or kNone (scratch)
   std::vector<uint8_t> proposal_state_;   // per face: a ProposalState (cluster_iterate.cpp)
-  // Disk-test refusals are remembered for one iteration: a face proposing the same destination
-  // again, with no face around its vertices moved since, is refused without gathering its ring.
-  std::vector<uint32_t> disk_refused_;    // faces the disk tests refused last iteration
+  // Disk-test refusals are remembered (proposal_state_ kRefusedByDisk, destination_ kept): a face
+  // proposing the same destination again, with no face around its vertices moved since, is
+  // refused without gathering its ring; with the accelerator it is not even tested again until
+  // that could change (step()).
   std::vector<uint32_t> vertex_moved_at_;  // per vertex: the last iteration that moved a face around it
   std::vector<std::vector<uint32_t>> worker_moves_;
   std::vector<std::vector<uint32_t>> worker_rings_;  // vertex rings of proposals: size, then faces
@@ -234,6 +235,11 @@ class BoundaryIteration final : public IterationEngine {
   // proposal cleared. The changed clusters' generators are then updated by update_generators().
   void apply_move(uint32_t f, uint32_t to);
   void mark_dirty_around(uint32_t f);  // f and its neighbours: labels they read changed
+  // Refused faces asleep (see step()) around f's vertices marked dirty: their disk tests read
+  // the labels of their vertex ring.
+  void wake_refused_around(uint32_t f);
+  float proposal_budget(uint32_t f) const;  // f proposes destination_[f] (cluster_iterate.cpp)
+  bool any_asleep_ = false;  // a refused face has been put to sleep since reset()
   void update_generators();            // generators of changed_clusters_, and their movement
   void sum_live_watches();             // folds the workers' live_change into live_watches_
   std::vector<double> movement_;                  // per cluster: total distance its generator moved

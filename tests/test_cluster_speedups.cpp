@@ -3,10 +3,16 @@
 // (cluster_iterate.cpp).
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cluster_engine.h"
+#include "boundary_rule.h"
+#include "rule_budget.h"
 #include "meshcvt/cluster.h"
 #include "meshcvt/io.h"
 #include "meshcvt/topology.h"
@@ -84,6 +90,75 @@ TEST_CASE("Lloyd steps: same result on any thread count; cluster() starts lower 
 // change its decision; if that bound were wrong anywhere, labels would differ from testing every
 // border face every iteration. Random initialization and the paper's mode make many moves and many
 // near-ties, the cases most likely to expose a bound that is too loose.
+TEST_CASE("rule budgets: generators moved by less than a face's budget leave its decision unchanged") {
+  // stay_budget and move_budget (rule_budget.h) on random cluster edges placed near the rule's
+  // thresholds: moving p's and q's generators by less than the budget (measured on the float
+  // coordinates, as the engine measures it) must not change whether the face moves. The engine
+  // re-tests a face only once that much movement has added up, so a budget too large would
+  // change labels there (the accelerator-off comparison below rarely reaches such a case).
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), weight(0.1, 1.0), scale(0.5, 0.999);
+  auto offset = [&](const float base[3], double size, float out[3]) {
+    for (int k = 0; k < 3; ++k) out[k] = float(base[k] + size * unit(rng));
+  };
+  uint64_t checked = 0, tight = 0, moving = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const float origin[3] = {0, 0, 0};
+    float xl[3], xr[3], gp[3], gq[3];
+    offset(origin, 1.0, xl);
+    offset(xl, 0.05, xr);
+    offset(xl, 0.5, gp);
+    offset(gp, trial % 2 ? 0.01 : 0.2, gq);  // half of them with nearly equal distances
+    const float wl = float(weight(rng)), wr = float(weight(rng));
+    auto decide = [&](const float p[3], const float q[3]) {
+      return decide_cluster_edge(squared_distance(xl, p), squared_distance(xl, q), squared_distance(xr, p),
+                                 squared_distance(xr, q), wl, wr);
+    };
+    const float d_lp = squared_distance(xl, gp), d_lq = squared_distance(xl, gq);
+    const float d_rp = squared_distance(xr, gp), d_rq = squared_distance(xr, gq);
+    const EdgeMove outcome = decide(gp, gq);
+    for (bool left : {true, false}) {
+      const bool moves = outcome == (left ? EdgeMove::left_to_q : EdgeMove::right_to_p);
+      const double budget = moves ? move_budget(d_lp, d_lq, d_rp, d_rq, wl, wr, left)
+                                  : stay_budget(d_lp, d_lq, d_rp, d_rq, wl, wr, left);
+      if (!(budget > 0)) continue;
+      ++checked;
+      moving += moves;
+      tight += budget < 1e-3;
+      for (int k = 0; k < 8; ++k) {
+        // Each generator displaced by less than the budget (at most 1: a budget far too large
+        // must still be caught).
+        float np[3], nq[3];
+        offset(gp, 1.0, np);
+        offset(gq, 1.0, nq);
+        for (auto [g, n] : {std::pair<const float*, float*>{gp, np}, {gq, nq}}) {
+          double dir[3], len = 0;
+          for (int c = 0; c < 3; ++c) dir[c] = double(n[c]) - g[c], len += dir[c] * dir[c];
+          len = std::sqrt(len);
+          const double step = std::min(budget, 1.0) * scale(rng);
+          for (int c = 0; c < 3; ++c) n[c] = float(g[c] + (len > 0 ? dir[c] / len * step : 0.0));
+        }
+        double moved_p = 0, moved_q = 0;
+        for (int c = 0; c < 3; ++c) {
+          moved_p += (double(np[c]) - gp[c]) * (double(np[c]) - gp[c]);
+          moved_q += (double(nq[c]) - gq[c]) * (double(nq[c]) - gq[c]);
+        }
+        if (!(std::sqrt(std::max(moved_p, moved_q)) < budget)) continue;  // float rounding overshot
+        const EdgeMove after = decide(np, nq);
+        CAPTURE(trial);
+        CAPTURE(left);
+        CHECK((after == (left ? EdgeMove::left_to_q : EdgeMove::right_to_p)) == moves);
+      }
+    }
+  }
+  CAPTURE(checked);
+  CAPTURE(moving);
+  CAPTURE(tight);
+  CHECK(checked > 20000);   // most edges have a budget
+  CHECK(moving > 5000);     // both outcomes are covered
+  CHECK(tight > 1000);      // and many decisions close to their thresholds
+}
+
 TEST_CASE("margin accelerator: identical labels, moves and energies to testing every border face") {
   Mesh m = scanned_elephant();
   Topology t = build_topology(m);
