@@ -412,10 +412,10 @@ class Mesher {
  public:
   Mesher(const Mesh& mesh, const Topology& topology, const FaceGeometry& geom, const EdgeGraph& edges,
          const std::vector<uint32_t>& labels, uint32_t regions, const Proxies& proxies, const MeshingOptions& options,
-         WorkerPool& pool, ShapeApproximation& out)
+         WorkerPool& pool, ShapeApproximation& out, bool recolor_from_scratch)
       : mesh_(mesh), topology_(topology), geom_(geom), graph_(edges), labels_(labels), regions_(regions), proxies_(proxies),
         options_(options), pool_(pool), out_(out), nv_(uint32_t(mesh.vertex_count())),
-        nf_(uint32_t(mesh.face_count())) {}
+        nf_(uint32_t(mesh.face_count())), recolor_from_scratch_(recolor_from_scratch) {}
 
   void run();
 
@@ -459,7 +459,10 @@ class Mesher {
   bool triangulate(bool last_round);
   void index_regions();
   void recolor();
-  void color_region(uint32_t r, std::vector<HeapEntry>& heap);
+  void color_region(uint32_t r, std::vector<HeapEntry>& heap, bool from_changed_seeds);
+  void seed_changed(uint32_t v) {
+    if (!seed_changed_[v]) seed_changed_[v] = 1, changed_seeds_.push_back(v);
+  }
   std::vector<uint32_t> crossing_splits(uint32_t region, const std::vector<uint32_t>& polygon) const;
   uint32_t deviation_split(uint32_t region) const;
   bool valid_coloring(uint32_t region, const std::vector<uint32_t>& polygon, std::vector<uint32_t>& tris) const;
@@ -478,6 +481,7 @@ class Mesher {
   WorkerPool& pool_;
   ShapeApproximation& out_;
   const uint32_t nv_, nf_;
+  const bool recolor_from_scratch_;  // detail::mesh_partition_from_scratch: no decrease-only recoloring
   double mean_edge_ = 0;
 
   std::vector<uint8_t> open_;       // per vertex: on a boundary or non-manifold edge
@@ -495,6 +499,14 @@ class Mesher {
 
   // Coloring, redone only for regions whose border changed (`dirty_`: an anchor was added on it).
   std::vector<uint8_t> dirty_;
+  // Anchors are only ever added, so a border vertex's (distance, color) only ever decreases (a
+  // chord split gives it a nearer end): a region colored before is colored again from the border
+  // vertices whose key decreased since, keeping the rest of its coloring. The multi-source
+  // Dijkstra's result is the least fixed point of its relaxation in the (distance, color) order,
+  // which that decrease-only update reaches as well as a coloring from scratch: the same colors.
+  std::vector<uint8_t> colored_;        // per region: colored from scratch once
+  std::vector<uint8_t> seed_changed_;   // per vertex: its key decreased since the last recolor()
+  std::vector<uint32_t> changed_seeds_;  // those vertices
   std::vector<uint8_t> unsettled_;  // per region: got an anchor since settle_anchors last looked at it
   std::vector<uint32_t> region_face_offsets_, region_faces_;          // non-collapsed faces, CSR
   std::vector<uint32_t> region_interior_offsets_, region_interior_;   // vertices on no border, CSR
@@ -662,6 +674,7 @@ void Mesher::add_anchor(uint32_t v, AnchorKind kind) {
   anchor_list_.push_back(v);
   vc_[v].color = v;
   vc_[v].distance = 0;
+  seed_changed(v);
   // The chords through v changed: every region around v needs its anchors settled and its coloring
   // done again.
   for (uint32_t i = topology_.vertex_face_offsets[v]; i < topology_.vertex_face_offsets[v + 1]; ++i)
@@ -889,22 +902,33 @@ void Mesher::index_regions() {
 // interior vertices only neighbour its own interior and border, so regions are independent.
 void Mesher::recolor() {
   std::vector<Chord> chords;
-  std::vector<double> arc;
+  std::vector<double> from_a, from_b;
   for (uint32_t r = 0; r < regions_; ++r) {
     if (!dirty_[r] || !region_ok_[r]) continue;
     loop_chords(region_loop_[r], chords);
     for (const Chord& c : chords) {
       if (!owns(chord_region(c), chord_neighbor(c))) continue;
-      arc.assign(c.steps + 1, 0.0);
+      // Arc lengths summed outward from each end, so a vertex's distance to an end does not
+      // depend on where the chord's other end is: splitting a chord never makes a key larger.
+      from_a.assign(c.steps + 1, 0.0);
+      from_b.assign(c.steps + 1, 0.0);
       for (uint32_t i = 0; i < c.steps; ++i)
-        arc[i + 1] = arc[i] + length(position(chord_vertex(c, i + 1)) - position(chord_vertex(c, i)));
+        from_a[i + 1] = from_a[i] + length(position(chord_vertex(c, i + 1)) - position(chord_vertex(c, i)));
+      for (uint32_t i = c.steps; i-- > 0;)
+        from_b[i] = from_b[i + 1] + length(position(chord_vertex(c, i + 1)) - position(chord_vertex(c, i)));
       uint32_t a = chord_vertex(c, 0), b = chord_vertex(c, c.steps);
       for (uint32_t i = 1; i < c.steps; ++i) {
-        double da = arc[i], db = arc[c.steps] - arc[i];
+        double da = from_a[i], db = from_b[i];
         bool to_a = da < db || (da == db && a < b);
         uint32_t v = chord_vertex(c, i);
-        vc_[v].color = to_a ? a : b;
-        vc_[v].distance = to_a ? da : db;
+        const uint32_t color = to_a ? a : b;
+        const double distance = to_a ? da : db;
+        if (color == vc_[v].color && distance == vc_[v].distance) continue;
+        // (only ever smaller: a chord is only ever split, see colored_)
+        assert(distance < vc_[v].distance || (distance == vc_[v].distance && color < vc_[v].color));
+        vc_[v].color = color;
+        vc_[v].distance = distance;
+        seed_changed(v);
       }
     }
   }
@@ -937,13 +961,19 @@ void Mesher::recolor() {
   pool_.run(parts, [&](size_t begin, size_t end, unsigned) {
     std::vector<HeapEntry> heap;
     for (size_t p = begin; p < end; ++p)
-      for (size_t i = bounds[p]; i < bounds[p + 1]; ++i) color_region(todo[i], heap);
+      for (size_t i = bounds[p]; i < bounds[p + 1]; ++i) {
+        const uint32_t r = todo[i];
+        color_region(r, heap, colored_[r] && !recolor_from_scratch_);
+        colored_[r] = 1;
+      }
   }, /*min_parallel=*/2);
+  for (uint32_t v : changed_seeds_) seed_changed_[v] = 0;
+  changed_seeds_.clear();
 }
 
 // Multi-source Dijkstra over region r's interior from its border (colors and distances set), then
 // the region's three-colored faces as candidate triangles.
-void Mesher::color_region(uint32_t r, std::vector<HeapEntry>& heap) {
+void Mesher::color_region(uint32_t r, std::vector<HeapEntry>& heap, bool from_changed_seeds) {
   auto later = [](const HeapEntry& a, const HeapEntry& b) {
     return a.distance_bits != b.distance_bits ? a.distance_bits > b.distance_bits : a.color_vertex > b.color_vertex;
   };
@@ -952,16 +982,17 @@ void Mesher::color_region(uint32_t r, std::vector<HeapEntry>& heap) {
     heap.push_back({std::bit_cast<uint64_t>(d), uint64_t(color) << 32 | v});
     std::push_heap(heap.begin(), heap.end(), later);
   };
-  for (uint32_t i = region_interior_offsets_[r]; i < region_interior_offsets_[r + 1]; ++i) {
-    uint32_t v = region_interior_[i];
-    vc_[v].color = kNone;
-    vc_[v].distance = std::numeric_limits<double>::infinity();
-  }
-  uint32_t l = region_loop_[r];
+  const uint32_t l = region_loop_[r];
+  if (!from_changed_seeds)
+    for (uint32_t i = region_interior_offsets_[r]; i < region_interior_offsets_[r + 1]; ++i) {
+      uint32_t v = region_interior_[i];
+      vc_[v].color = kNone;
+      vc_[v].distance = std::numeric_limits<double>::infinity();
+    }
   heap.clear();
   for (uint32_t i = loop_offsets_[l]; i < loop_offsets_[l + 1]; ++i) {
     uint32_t v = loop_vertex_[i];
-    if (vc_[v].color != kNone) push(vc_[v].distance, vc_[v].color, v);
+    if (vc_[v].color != kNone && (!from_changed_seeds || seed_changed_[v])) push(vc_[v].distance, vc_[v].color, v);
   }
   while (!heap.empty()) {
     std::pop_heap(heap.begin(), heap.end(), later);
@@ -1375,6 +1406,9 @@ void Mesher::run() {
   reverted_.assign(regions_, 0);
   fell_back_.assign(regions_, 0);
   dirty_.assign(regions_, 1);
+  colored_.assign(regions_, 0);
+  seed_changed_.assign(nv_, 0);
+  changed_seeds_.clear();
   unsettled_.assign(regions_, 1);
   vc_.assign(nv_, VertexColor{std::numeric_limits<double>::infinity(), kNone, kNone});
   index_regions();
@@ -1745,7 +1779,7 @@ uint32_t make_solid_components(const Mesh& mesh, const Topology& topology, const
 
 ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topology, const FaceGeometry& geom,
                                        std::vector<uint32_t> labels, uint32_t regions, const MeshingOptions& options,
-                                       unsigned threads) {
+                                       unsigned threads, bool recolor_from_scratch = false) {
   auto t = Clock::now();
   WorkerPool pool(threads);
   ShapeApproximation out;
@@ -1759,7 +1793,7 @@ ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topolog
     proxies = compute_proxies(geom, labels, count);
     out.fixes = partition_fixes;
     out.stats = MeshingStats{};
-    Mesher(mesh, topology, geom, edges, labels, count, proxies, options, pool, out).run();
+    Mesher(mesh, topology, geom, edges, labels, count, proxies, options, pool, out, recolor_from_scratch).run();
     // Regions still with flipped triangles are too curved for one polygon: split them, mesh again.
     std::vector<uint32_t> curved;
     for (const MeshingFix& f : out.fixes)
@@ -1790,15 +1824,30 @@ ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topolog
 
 }  // namespace
 
-ShapeApproximation mesh_partition(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
-                                  uint32_t regions, const MeshingOptions& options) {
+namespace {
+ShapeApproximation checked_mesh_partition(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                                          uint32_t regions, const MeshingOptions& options, bool from_scratch) {
   check_labels(mesh, labels, regions);
   check_meshing_options(options);
   if (topology.face_adjacent.size() != 3 * mesh.face_count())
     throw OptionError("topology does not belong to this mesh");
   FaceGeometry geom = face_geometry(mesh);
-  return mesh_partition_with(mesh, topology, geom, labels, regions, options, /*threads=*/0);
+  return mesh_partition_with(mesh, topology, geom, labels, regions, options, /*threads=*/0, from_scratch);
 }
+}  // namespace
+
+ShapeApproximation mesh_partition(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                                  uint32_t regions, const MeshingOptions& options) {
+  return checked_mesh_partition(mesh, topology, labels, regions, options, false);
+}
+
+namespace detail {
+ShapeApproximation mesh_partition_from_scratch(const Mesh& mesh, const Topology& topology,
+                                               const std::vector<uint32_t>& labels, uint32_t regions,
+                                               const MeshingOptions& options) {
+  return checked_mesh_partition(mesh, topology, labels, regions, options, true);
+}
+}  // namespace detail
 
 ShapeApproximation approximate_shape(const Mesh& mesh, const Topology& topology, const ApproximateOptions& options) {
   validate(mesh, options);

@@ -351,6 +351,29 @@ TEST_CASE("approximate: the result does not depend on the thread count") {
   }
 }
 
+TEST_CASE("mesh_partition: recoloring a region from its changed border gives the coloring from scratch") {
+  // Each meshing round that adds anchors colors the regions around them again; mesh_partition does
+  // it from the border vertices whose (distance, color) decreased (approximate.cpp, colored_). On a
+  // scanned elephant many regions take crossing-split anchors round after round: the outputs must
+  // be those of coloring every region from scratch in every round.
+  Mesh m = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
+  Topology t = build_topology(m);
+  size_t flip_anchors = 0;
+  for (uint32_t n : {12u, 30u, 60u}) {
+    CAPTURE(n);
+    ShapeApproximation partition = approximate_shape(m, t, with_proxies(n));
+    const std::vector<uint32_t>& labels = partition.clustering.labels;
+    ShapeApproximation a = mesh_partition(m, t, labels, n);
+    ShapeApproximation b = detail::mesh_partition_from_scratch(m, t, labels, n);
+    CHECK(a.labels == b.labels);
+    CHECK(a.mesh.positions == b.mesh.positions);
+    CHECK(a.mesh.indices == b.mesh.indices);
+    CHECK(a.fixes == b.fixes);
+    for (const MeshingFix& f : a.fixes) flip_anchors += f.kind == MeshingFix::flip_anchor;
+  }
+  CHECK(flip_anchors > 0);  // rounds that recolor did happen
+}
+
 TEST_CASE("mesh_partition: a closed component with fewer than 4 regions is made solid (two hemispheres)") {
   // Two hemispheres would give two copies of one triangle (their border has no anchor: three are
   // added); the component is split up to 4 regions instead, a tetrahedron-like solid.

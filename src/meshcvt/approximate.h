@@ -229,6 +229,15 @@ ShapeApproximation approximate_shape(const Mesh& mesh, const ApproximateOptions&
 ShapeApproximation mesh_partition(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
                                   uint32_t regions, const MeshingOptions& options = {});
 
+namespace detail {
+/// mesh_partition with every region colored from scratch in every meshing round. mesh_partition
+/// colors a region again only from the border vertices whose (distance, color) decreased, which
+/// must give the same colors; the tests compare the two. Same inputs, outputs and errors.
+ShapeApproximation mesh_partition_from_scratch(const Mesh& mesh, const Topology& topology,
+                                               const std::vector<uint32_t>& labels, uint32_t regions,
+                                               const MeshingOptions& options = {});
+}  // namespace detail
+
 /// L2,1 distortion E = sum_k |n_k - N_i|^2 |T_k| of a labeling (N_i: normalized area-weighted mean
 /// normal of region i), in double, squared input units. `total_area` (optional) receives A.
 double l21_distortion(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t regions,
