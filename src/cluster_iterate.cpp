@@ -186,6 +186,33 @@ bool ring_keeps_disks(const Topology& topology, const std::vector<uint32_t>& lab
 }
 
 
+// The four-case test of the cluster edge between f (in p, at distance d_own from p's generator)
+// and its neighbour g (in q), the edge oriented so that T_l is the lower face id: the three other
+// distances and whether the rule moves f. Also its budget, the outcome's (stay or move).
+struct EdgeTest {
+  float d_fq, d_gp, d_gq;
+  bool f_moves;
+};
+inline EdgeTest test_edge(const float* point, const float* weight, const float* gen, uint32_t f, uint32_t g, uint32_t p,
+                          uint32_t q, float d_own) {
+  const float* xf = point + 3 * size_t(f);
+  const float* xg = point + 3 * size_t(g);
+  EdgeTest t;
+  t.d_fq = squared_distance(xf, gen + 3 * size_t(q));
+  t.d_gp = squared_distance(xg, gen + 3 * size_t(p));
+  t.d_gq = squared_distance(xg, gen + 3 * size_t(q));
+  if (f < g)  // f is T_l in V_p, g is T_r in V_q
+    t.f_moves = decide_cluster_edge(d_own, t.d_fq, t.d_gp, t.d_gq, weight[f], weight[g]) == EdgeMove::left_to_q;
+  else        // g is T_l in V_q, f is T_r in V_p
+    t.f_moves = decide_cluster_edge(t.d_gq, t.d_gp, t.d_fq, d_own, weight[g], weight[f]) == EdgeMove::right_to_p;
+  return t;
+}
+inline double edge_budget(const float* weight, uint32_t f, uint32_t g, float d_own, const EdgeTest& t) {
+  auto budget = t.f_moves ? move_budget : stay_budget;
+  return f < g ? budget(d_own, t.d_fq, t.d_gp, t.d_gq, weight[f], weight[g], true)
+               : budget(t.d_gq, t.d_gp, t.d_fq, d_own, weight[g], weight[f], false);
+}
+
 // Rounded down to float, so a watch never fires late.
 float float_budget(double budget) {
   float b = float(budget);
@@ -449,22 +476,12 @@ void BoundaryIteration::evaluate_range(size_t begin, size_t end, unsigned worker
       if (g == kNone) continue;
       uint32_t q = labels_[g];
       if (q == p) continue;
-      const float* xg = point + 3 * size_t(g);
-      float d_fq = squared_distance(xf, gen + 3 * size_t(q));
-      float d_gp = squared_distance(xg, gen + 3 * size_t(p));
-      float d_gq = squared_distance(xg, gen + 3 * size_t(q));
-      bool f_moves;
-      if (f < g)  // f is T_l in V_p, g is T_r in V_q
-        f_moves = decide_cluster_edge(d_own, d_fq, d_gp, d_gq, weight[f], weight[g]) == EdgeMove::left_to_q;
-      else        // g is T_l in V_q, f is T_r in V_p
-        f_moves = decide_cluster_edge(d_gq, d_gp, d_fq, d_own, weight[g], weight[f]) == EdgeMove::right_to_p;
-      if (f_moves && (best == kNone || better_destination(d_fq, q, best_d, best))) {
+      const EdgeTest t = test_edge(point, weight, gen, f, g, p, q, d_own);
+      if (t.f_moves && (best == kNone || better_destination(t.d_fq, q, best_d, best))) {
         best = q;
-        best_d = d_fq;
+        best_d = t.d_fq;
       }
-      if (accelerate_ && best == kNone)
-        budget = std::min(budget, f < g ? stay_budget(d_own, d_fq, d_gp, d_gq, weight[f], weight[g], true)
-                                        : stay_budget(d_gq, d_gp, d_fq, d_own, weight[g], weight[f], false));
+      if (accelerate_ && best == kNone) budget = std::min(budget, edge_budget(weight, f, g, d_own, t));
     }
     if (accelerate_) eval_stamp_[f] = iteration_;
     if (best != kNone) {
@@ -492,30 +509,15 @@ float BoundaryIteration::proposal_budget(uint32_t f) const {
   const float* xf = point + 3 * size_t(f);
   const float d_own = squared_distance(xf, gen + 3 * size_t(p));
   const float best_d = squared_distance(xf, gen + 3 * size_t(best));
-  auto single = [](float d) { return RuleSide{{1, 0}, {d, 0}, 1}; };
   double budget = 1e30;
   for (int e = 0; e < 3; ++e) {
     uint32_t g = adj[e];
     if (g == kNone) continue;
     uint32_t q = labels_[g];
     if (q == p) continue;
-    const float* xg = point + 3 * size_t(g);
-    float d_fq = squared_distance(xf, gen + 3 * size_t(q));
-    float d_gp = squared_distance(xg, gen + 3 * size_t(p));
-    float d_gq = squared_distance(xg, gen + 3 * size_t(q));
-    bool f_moves;
-    if (f < g)
-      f_moves = decide_cluster_edge(d_own, d_fq, d_gp, d_gq, weight[f], weight[g]) == EdgeMove::left_to_q;
-    else
-      f_moves = decide_cluster_edge(d_gq, d_gp, d_fq, d_own, weight[g], weight[f]) == EdgeMove::right_to_p;
-    if (f_moves) {
-      budget = std::min(budget, f < g ? move_budget(d_own, d_fq, d_gp, d_gq, weight[f], weight[g], true)
-                                      : move_budget(d_gq, d_gp, d_fq, d_own, weight[g], weight[f], false));
-      if (q != best) budget = std::min(budget, comparison_budget(single(best_d), single(d_fq)));
-    } else {
-      budget = std::min(budget, f < g ? stay_budget(d_own, d_fq, d_gp, d_gq, weight[f], weight[g], true)
-                                      : stay_budget(d_gq, d_gp, d_fq, d_own, weight[g], weight[f], false));
-    }
+    const EdgeTest t = test_edge(point, weight, gen, f, g, p, q, d_own);
+    budget = std::min(budget, edge_budget(weight, f, g, d_own, t));
+    if (t.f_moves && q != best) budget = std::min(budget, comparison_budget(single_side(best_d), single_side(t.d_fq)));
   }
   return float_budget(budget);
 }

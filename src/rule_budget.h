@@ -47,24 +47,36 @@ inline double comparison_budget(const RuleSide& a, const RuleSide& b) {
   return t * (1 - kRoundoff);
 }
 
+// A one-term side of a comparison: the distance d alone.
+inline RuleSide single_side(float d) { return RuleSide{{1, 0}, {d, 0}, 1}; }
+
+// The comparisons of decide_cluster_edge (boundary_rule.h) for one edge, in its argument order, and
+// the two weighted sides of case 4.
+struct EdgeSides {
+  RuleSide in_p, in_q;
+  bool left_stays, right_stays, pair_in_p;
+};
+inline EdgeSides edge_sides(float d_lp, float d_lq, float d_rp, float d_rq, float w_l, float w_r) {
+  const float both_in_p = d_lp * w_l + d_rp * w_r, both_in_q = d_lq * w_l + d_rq * w_r;
+  return {{{w_l, w_r}, {d_lp, d_rp}, 2}, {{w_l, w_r}, {d_lq, d_rq}, 2}, d_lp <= d_lq, d_rp >= d_rq, both_in_p < both_in_q};
+}
+
 // Budget of a face that stays for one cluster edge (f in V_p, g in V_q): the smallest displacement
 // of the generators of p or q that could make this edge move it. Same argument order as
 // decide_cluster_edge; `face_is_left` says which of the edge's faces is the one staying.
 inline double stay_budget(float d_lp, float d_lq, float d_rp, float d_rq, float w_l, float w_r, bool face_is_left) {
-  auto single = [](float d) { return RuleSide{{1, 0}, {d, 0}, 1}; };
-  const RuleSide in_p{{w_l, w_r}, {d_lp, d_rp}, 2}, in_q{{w_l, w_r}, {d_lq, d_rq}, 2};
-  const bool left_stays = d_lp <= d_lq, right_stays = d_rp >= d_rq;
-  const float both_in_p = d_lp * w_l + d_rp * w_r, both_in_q = d_lq * w_l + d_rq * w_r;
-  const bool pair_in_p = both_in_p < both_in_q;
+  const EdgeSides e = edge_sides(d_lp, d_lq, d_rp, d_rq, w_l, w_r);
+  const RuleSide &in_p = e.in_p, &in_q = e.in_q;
+  const bool left_stays = e.left_stays, right_stays = e.right_stays, pair_in_p = e.pair_in_p;
   double budget = 0;
   if (face_is_left) {  // the left face stays iff left_stays || (!right_stays && pair_in_p)
-    if (left_stays) budget = comparison_budget(single(d_lp), single(d_lq));
+    if (left_stays) budget = comparison_budget(single_side(d_lp), single_side(d_lq));
     if (!right_stays && pair_in_p)
-      budget = std::max(budget, std::min(comparison_budget(single(d_rp), single(d_rq)), comparison_budget(in_p, in_q)));
+      budget = std::max(budget, std::min(comparison_budget(single_side(d_rp), single_side(d_rq)), comparison_budget(in_p, in_q)));
   } else {  // the right face stays iff right_stays || (!left_stays && !pair_in_p)
-    if (right_stays) budget = comparison_budget(single(d_rq), single(d_rp));
+    if (right_stays) budget = comparison_budget(single_side(d_rq), single_side(d_rp));
     if (!left_stays && !pair_in_p)
-      budget = std::max(budget, std::min(comparison_budget(single(d_lq), single(d_lp)), comparison_budget(in_q, in_p)));
+      budget = std::max(budget, std::min(comparison_budget(single_side(d_lq), single_side(d_lp)), comparison_budget(in_q, in_p)));
   }
   return budget;
 }
@@ -72,21 +84,19 @@ inline double stay_budget(float d_lp, float d_lq, float d_rp, float d_rq, float 
 // Budget of a face that moves by one cluster edge: the smallest displacement of the generators of
 // p or q that could make this edge stop moving it. Same arguments as stay_budget.
 inline double move_budget(float d_lp, float d_lq, float d_rp, float d_rq, float w_l, float w_r, bool face_is_left) {
-  auto single = [](float d) { return RuleSide{{1, 0}, {d, 0}, 1}; };
-  const RuleSide in_p{{w_l, w_r}, {d_lp, d_rp}, 2}, in_q{{w_l, w_r}, {d_lq, d_rq}, 2};
-  const bool left_stays = d_lp <= d_lq, right_stays = d_rp >= d_rq;
-  const float both_in_p = d_lp * w_l + d_rp * w_r, both_in_q = d_lq * w_l + d_rq * w_r;
-  const bool pair_in_p = both_in_p < both_in_q;
+  const EdgeSides e = edge_sides(d_lp, d_lq, d_rp, d_rq, w_l, w_r);
+  const RuleSide &in_p = e.in_p, &in_q = e.in_q;
+  const bool left_stays = e.left_stays, right_stays = e.right_stays, pair_in_p = e.pair_in_p;
   double either = 0;
   if (face_is_left) {  // the left face moves iff !left_stays && (right_stays || !pair_in_p)
-    if (right_stays) either = comparison_budget(single(d_rq), single(d_rp));
+    if (right_stays) either = comparison_budget(single_side(d_rq), single_side(d_rp));
     if (!pair_in_p) either = std::max(either, comparison_budget(in_q, in_p));
-    return std::min(comparison_budget(single(d_lq), single(d_lp)), either);
+    return std::min(comparison_budget(single_side(d_lq), single_side(d_lp)), either);
   }
   // the right face moves iff !right_stays && (left_stays || pair_in_p)
-  if (left_stays) either = comparison_budget(single(d_lp), single(d_lq));
+  if (left_stays) either = comparison_budget(single_side(d_lp), single_side(d_lq));
   if (pair_in_p) either = std::max(either, comparison_budget(in_p, in_q));
-  return std::min(comparison_budget(single(d_rp), single(d_rq)), either);
+  return std::min(comparison_budget(single_side(d_rp), single_side(d_rq)), either);
 }
 
 }  // namespace meshcvt
