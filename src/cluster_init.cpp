@@ -461,10 +461,11 @@ DualGraph face_graph(const ClusterProblem& problem, const Mesh& mesh, const Topo
 // recomputed in between: light nodes, cheap to merge, merge again within the level while heavy
 // ones wait, as in a global priority queue (Garland et al.). Every level still ends at its exact
 // count. 4.8M bunny: heaviest cluster 3.0x the mean, 24 Lloyd steps, energy at convergence
-// -1.2%; the 1.2M bunny -2.5%. (0.25 and 0.35 each left light clusters somewhere: 0.13x the mean
-// on the 131k sphere with 0.25, 0.06x on the 4.8M bunny with 0.35, and the latter 48 Lloyd steps;
-// bench/RESULTS.md.) Not for l21, whose regions should differ in size (flat parts large): there
-// it raised the distortion by up to 20%.
+// -1.2%; the 1.2M bunny -2.5%. (With the cap on every level of at most 16n nodes, 0.25 and 0.35
+// each left light clusters somewhere: 0.13x the mean on the 131k sphere with 0.25, 0.07x on the
+// 4.8M bunny with 0.35, and the latter 42-48 Lloyd steps; bench/RESULTS.md.) Not for l21 (dual
+// graphs of 6 dimensions: normals and centroids), whose regions should differ in size (flat parts
+// large): there it raised the distortion by up to 20%.
 constexpr double kBalancedRoundFraction = 0.3;
 constexpr uint64_t kBalancedLevelsNodesPerCluster = 8;
 
@@ -483,7 +484,8 @@ std::vector<uint32_t> contract_levels(DualGraph& g, const std::vector<uint32_t>&
         throw OptionError("cannot make " + std::to_string(clusters) + " connected clusters: the face graph has more components");
       }
       uint32_t wanted = g.nodes - target;
-      // Balanced levels (see kBalancedRoundFraction): rounds of at most that share of the nodes.
+      // Balanced levels (see kBalancedRoundFraction; dims 3: cvt and ccvt): rounds of at most that
+      // share of the nodes.
       if (g.dims == 3 && !part && target <= kBalancedLevelsNodesPerCluster * uint64_t(clusters))
         wanted = std::min(wanted, std::max<uint32_t>(1, uint32_t(kBalancedRoundFraction * g.nodes)));
       relabels.push_back(contract_round(g, wanted, pool, scratch));
