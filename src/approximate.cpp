@@ -463,7 +463,7 @@ class Mesher {
   void seed_changed(uint32_t v) {
     if (!seed_changed_[v]) seed_changed_[v] = 1, changed_seeds_.push_back(v);
   }
-  std::vector<uint32_t> crossing_splits(uint32_t region, const std::vector<uint32_t>& polygon) const;
+  std::vector<uint32_t> crossing_splits(uint32_t region, const std::vector<uint32_t>& polygon);
   uint32_t deviation_split(uint32_t region) const;
   bool valid_coloring(uint32_t region, const std::vector<uint32_t>& polygon, std::vector<uint32_t>& tris) const;
   uint32_t triangulate_polygon(uint32_t region, const std::vector<uint32_t>& polygon, std::vector<uint32_t>& tris) const;
@@ -513,11 +513,26 @@ class Mesher {
   std::vector<uint8_t> on_border_;                                    // per vertex: on some loop
   std::vector<std::vector<uint32_t>> candidates_;  // per region: the coloring's triangles (input vertex ids)
   // Per region: the last direct triangulation and what it was made from, reused while they match.
+  // Kept in input vertex ids: every round numbers the output vertices again, and an anchor added
+  // anywhere with a lower input id renumbers all those after it, so output ids would not match
+  // from one round to the next although the polygon is the same.
   struct CachedTriangulation {
-    std::vector<uint32_t> polygon, tris;
+    std::vector<uint32_t> polygon, tris;  // input vertex ids
     std::vector<V3> positions;
     uint32_t cost = 0;
   };
+  // Per region: the last crossing_splits() and the polygon it was made from. The result depends
+  // only on the polygon's positions and its chords, and a region that falls back tests its
+  // crossings in every round while another region takes anchors.
+  struct CachedCrossings {
+    std::vector<uint32_t> polygon, splits;  // input vertex ids
+    std::vector<V3> positions;
+  };
+  std::vector<CachedCrossings> crossings_cache_;
+  // The polygon (output ids) and its positions are `ids` (input ids) and `positions`.
+  bool same_polygon(const std::vector<uint32_t>& ids, const std::vector<V3>& positions,
+                    const std::vector<uint32_t>& polygon) const;
+  void keep_polygon(const std::vector<uint32_t>& polygon, std::vector<uint32_t>& ids, std::vector<V3>& positions) const;
   std::vector<CachedTriangulation> cache_;
 
   // Output of a meshing round.
@@ -894,6 +909,7 @@ void Mesher::index_regions() {
     if (!on_border_[v]) vc_[v].interior_region = vertex_region[v];
   candidates_.assign(regions_, {});
   cache_.assign(regions_, {});
+  crossings_cache_.assign(regions_, {});
 }
 
 // The paper's coloring, for the dirty regions. Border vertices: the anchor closest along their chord
@@ -1025,7 +1041,7 @@ void Mesher::color_region(uint32_t r, std::vector<HeapEntry>& heap, bool from_ch
 // Polygon edges of `region` that cross another one in the proxy plane (their chords cut across the
 // region): for each crossing pair, the farthest vertex of the chord that deviates more from its
 // segment, where to split it. Empty when the projected polygon is simple.
-std::vector<uint32_t> Mesher::crossing_splits(uint32_t region, const std::vector<uint32_t>& polygon) const {
+std::vector<uint32_t> Mesher::crossing_splits(uint32_t region, const std::vector<uint32_t>& polygon) {
   std::vector<uint32_t> splits;
   const V3 n = proxies_.normal[region];
   if (dot(n, n) == 0) return splits;
@@ -1045,6 +1061,8 @@ std::vector<uint32_t> Mesher::crossing_splits(uint32_t region, const std::vector
   // Anchors added earlier in this pass (another region's split on a shared border) are not in
   // `polygon` yet: nothing to split from it then; the round is redone with the new anchors.
   if (chords.size() != m) return splits;
+  CachedCrossings& cached = crossings_cache_[region];
+  if (same_polygon(cached.polygon, cached.positions, polygon)) return cached.splits;
   std::vector<double> deviation(m);
   std::vector<uint32_t> split(m);
   for (size_t i = 0; i < m; ++i) split[i] = farthest(chords[i], 0, chords[i].steps, deviation[i]);
@@ -1058,6 +1076,8 @@ std::vector<uint32_t> Mesher::crossing_splits(uint32_t region, const std::vector
     }
   std::sort(splits.begin(), splits.end());
   splits.erase(std::unique(splits.begin(), splits.end()), splits.end());
+  keep_polygon(polygon, cached.polygon, cached.positions);
+  cached.splits = splits;
   return splits;
 }
 
@@ -1187,6 +1207,23 @@ uint32_t Mesher::triangulate_polygon(uint32_t region, const std::vector<uint32_t
   return cost[m - 1];
 }
 
+bool Mesher::same_polygon(const std::vector<uint32_t>& ids, const std::vector<V3>& positions,
+                          const std::vector<uint32_t>& polygon) const {
+  if (ids.size() != polygon.size()) return false;
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    V3 a = positions[i], b = anchor_position_[polygon[i]];
+    if (ids[i] != anchors_[polygon[i]] || a.x != b.x || a.y != b.y || a.z != b.z) return false;
+  }
+  return true;
+}
+
+void Mesher::keep_polygon(const std::vector<uint32_t>& polygon, std::vector<uint32_t>& ids,
+                          std::vector<V3>& positions) const {
+  ids.resize(polygon.size());
+  positions.resize(polygon.size());
+  for (size_t i = 0; i < polygon.size(); ++i) ids[i] = anchors_[polygon[i]], positions[i] = anchor_position_[polygon[i]];
+}
+
 // One meshing round with the current anchors. Returns false when anchors were added (redo).
 bool Mesher::triangulate(bool last_round) {
   // Output vertices (in increasing input vertex order) and their positions. Anchors are only ever
@@ -1267,16 +1304,14 @@ bool Mesher::triangulate(bool last_round) {
       CachedTriangulation& cached = cache_[r];
       uint32_t cost = 1;
       if (splits.empty()) {
-        bool reused = !cached.polygon.empty() && cached.polygon == polygon;
-        for (size_t i = 0; i < m && reused; ++i) {
-          V3 a = cached.positions[i], b = anchor_position_[polygon[i]];
-          reused = a.x == b.x && a.y == b.y && a.z == b.z;
-        }
+        bool reused = same_polygon(cached.polygon, cached.positions, polygon);
         if (reused) {
           // Same polygon, same positions: only diagonals used elsewhere can have changed.
+          tris.resize(cached.tris.size());
+          for (size_t i = 0; i < tris.size(); ++i) tris[i] = out_id_[cached.tris[i]];
           uint32_t recount = 0;
-          for (size_t t = 0; t < cached.tris.size(); t += 3) {
-            const uint32_t* tri = &cached.tris[t];
+          for (size_t t = 0; t < tris.size(); t += 3) {
+            const uint32_t* tri = &tris[t];
             recount += !faces_along(anchor_position_[tri[0]], anchor_position_[tri[1]], anchor_position_[tri[2]],
                                     proxies_.normal[r]);
             for (int j = 0; j < 3; ++j)
@@ -1285,16 +1320,14 @@ bool Mesher::triangulate(bool last_round) {
           }
           reused = recount <= cached.cost;
           cost = recount;
+          out_.stats.reused_triangulations += reused;
         }
-        if (reused) {
-          tris = cached.tris;
-        } else {
+        if (!reused) {
           cost = triangulate_polygon(r, polygon, tris);
-          cached.polygon = polygon;
-          cached.tris = tris;
+          keep_polygon(polygon, cached.polygon, cached.positions);
+          cached.tris.resize(tris.size());
+          for (size_t i = 0; i < tris.size(); ++i) cached.tris[i] = anchors_[tris[i]];
           cached.cost = cost;
-          cached.positions.resize(m);
-          for (size_t i = 0; i < m; ++i) cached.positions[i] = anchor_position_[polygon[i]];
         }
       }
       if (cost > 0 && !last_round) {

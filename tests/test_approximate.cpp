@@ -374,6 +374,29 @@ TEST_CASE("mesh_partition: recoloring a region from its changed border gives the
   CHECK(flip_anchors > 0);  // rounds that recolor did happen
 }
 
+TEST_CASE("mesh_partition: a direct triangulation is kept while other regions take anchors") {
+  // A region triangulated directly keeps its triangulation from round to round while its polygon
+  // and positions stay the same. Every round numbers the output vertices again (an anchor added
+  // elsewhere shifts the ids after it), so what is kept must follow its input vertices.
+  Mesh m = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
+  Topology t = build_topology(m);
+  uint32_t reused = 0;
+  for (uint32_t n : {12u, 30u, 60u}) {
+    CAPTURE(n);
+    ShapeApproximation s = approximate_shape(m, t, with_proxies(n));
+    reused += s.stats.reused_triangulations;
+    check_closed_manifold(s);
+    CHECK(flipped_triangles(s) == s.stats.flipped_triangles);
+    // Every polygon's triangles use only its own anchors.
+    for (size_t k = 0; k < s.mesh.face_count(); ++k) {
+      uint32_t r = s.triangle_regions[k];
+      auto begin = s.polygon_vertices.begin() + s.polygon_offsets[r], end = s.polygon_vertices.begin() + s.polygon_offsets[r + 1];
+      for (int j = 0; j < 3; ++j) CHECK(std::find(begin, end, s.mesh.indices[3 * k + j]) != end);
+    }
+  }
+  CHECK(reused > 0);
+}
+
 TEST_CASE("mesh_partition: a closed component with fewer than 4 regions is made solid (two hemispheres)") {
   // Two hemispheres would give two copies of one triangle (their border has no anchor: three are
   // added); the component is split up to 4 regions instead, a tetrahedron-like solid.

@@ -154,6 +154,7 @@ struct MeshingStats {
   uint32_t coloring_regions = 0;      ///< regions triangulated by the Dijkstra coloring
   uint32_t fallback_regions = 0;      ///< regions triangulated directly (fallback_triangulation)
   uint32_t meshing_rounds = 0;        ///< 1 + rounds redone after anchor_position / flip_anchor fixes
+  uint32_t reused_triangulations = 0; ///< direct triangulations kept from an earlier round (same polygon and positions)
   uint32_t vertex_anchors = 0;        ///< anchors placed at their mesh vertex (anchor_position)
   uint64_t flipped_triangles = 0;     ///< output triangles facing away from their proxy normal (0 unless reported)
   uint64_t boundary_edges = 0;        ///< output edges with one triangle
