@@ -69,7 +69,6 @@
 #include <numeric>
 #include <queue>
 #include <string>
-#include <unordered_set>
 #include <vector>
 
 #include "cluster_engine.h"
@@ -165,6 +164,48 @@ uint64_t edge_key(uint32_t a, uint32_t b) {
   if (a > b) std::swap(a, b);
   return (uint64_t(a) << 32) | b;
 }
+
+// Undirected edges (edge_key) in an open-addressing table that keeps its memory from one meshing
+// round to the next: every round fills it again with the ~1000 chords and diagonals of a
+// 100-region approximation, one allocation per node in a std::unordered_set.
+class EdgeSet {
+ public:
+  void clear() {
+    std::fill(slots_.begin(), slots_.end(), kEmpty);
+    size_ = 0;
+  }
+  void insert(uint64_t key) {
+    assert(key != kEmpty);
+    if (2 * (size_ + 1) > slots_.size()) grow();
+    size_t i = slot(key);
+    while (slots_[i] != kEmpty && slots_[i] != key) i = (i + 1) & (slots_.size() - 1);
+    if (slots_[i] == kEmpty) slots_[i] = key, ++size_;
+  }
+  bool contains(uint64_t key) const {
+    if (slots_.empty()) return false;
+    for (size_t i = slot(key);; i = (i + 1) & (slots_.size() - 1)) {
+      if (slots_[i] == key) return true;
+      if (slots_[i] == kEmpty) return false;
+    }
+  }
+  size_t size() const { return size_; }
+
+ private:
+  static constexpr uint64_t kEmpty = ~uint64_t(0);  // edge_key of no edge: a < b always
+  size_t slot(uint64_t key) const { return size_t((key * 0x9E3779B97F4A7C15ull) >> shift_); }
+  void grow() {
+    std::vector<uint64_t> old = std::move(slots_);
+    size_t capacity = std::max<size_t>(64, 2 * old.size());
+    slots_.assign(capacity, kEmpty);
+    shift_ = 64 - std::countr_zero(capacity);
+    size_ = 0;
+    for (uint64_t key : old)
+      if (key != kEmpty) insert(key);
+  }
+  std::vector<uint64_t> slots_;
+  int shift_ = 64;
+  size_t size_ = 0;
+};
 
 // ---- per-face geometry and proxies
 
@@ -467,7 +508,7 @@ class Mesher {
   uint32_t deviation_split(uint32_t region) const;
   bool valid_coloring(uint32_t region, const std::vector<uint32_t>& polygon, std::vector<uint32_t>& tris) const;
   uint32_t triangulate_polygon(uint32_t region, const std::vector<uint32_t>& polygon, std::vector<uint32_t>& tris) const;
-  bool diagonal_free(uint32_t a, uint32_t b) const { return !edges_.count(edge_key(a, b)); }
+  bool diagonal_free(uint32_t a, uint32_t b) const { return !edges_.contains(edge_key(a, b)); }
   void finish();
 
   const Mesh& mesh_;
@@ -540,7 +581,8 @@ class Mesher {
   std::vector<uint32_t> anchors_;               // output vertex -> input vertex
   std::vector<V3> anchor_position_;
   std::vector<uint32_t> polygon_offsets_, polygon_vertices_;  // output vertex ids
-  std::unordered_set<uint64_t> edges_;          // chord edges and accepted diagonals
+  EdgeSet edges_;                               // chord edges and accepted diagonals
+  std::vector<uint32_t> polygon_index_;         // per output vertex: its index in the polygon at hand, else kNone
   // Per vertex, side by side (the coloring's inner loop reads all three for each neighbour): the
   // input vertex of its anchor (kNone: none yet), the path length to it, and its region when on
   // no border (else kNone).
@@ -1102,11 +1144,8 @@ bool Mesher::valid_coloring(uint32_t region, const std::vector<uint32_t>& polygo
   const size_t m = polygon.size();
   if (tris.size() != 3 * (m - 2)) return false;
   // Position of each output vertex in the polygon.
-  auto local = [&](uint32_t id) -> uint32_t {
-    for (uint32_t i = 0; i < m; ++i)
-      if (polygon[i] == id) return i;
-    return kNone;
-  };
+  // Set for `polygon` by triangulate(); kNone for ids of no polygon vertex (or of no anchor).
+  auto local = [&](uint32_t id) { return id < polygon_index_.size() ? polygon_index_[id] : kNone; };
   std::vector<uint64_t> directed;
   directed.reserve(tris.size());
   for (size_t t = 0; t < tris.size(); t += 3) {
@@ -1252,6 +1291,7 @@ bool Mesher::triangulate(bool last_round) {
     }
     anchor_position_.push_back(rounded(distinct ? (1.0 / distinct) * sum : p));
   }
+  polygon_index_.assign(anchors_.size(), kNone);
   // Polygons, and their edges.
   polygon_offsets_.assign(1, 0);
   polygon_vertices_.clear();
@@ -1285,9 +1325,21 @@ bool Mesher::triangulate(bool last_round) {
     polygon.assign(polygon_vertices_.begin() + polygon_offsets_[r], polygon_vertices_.begin() + polygon_offsets_[r + 1]);
     const size_t m = polygon.size();
     if (m < 3) continue;  // cannot happen: settle_anchors gives every polygon three anchors
+    // polygon_index_ holds this polygon's positions while the region is looked at.
+    struct PolygonIndex {
+      std::vector<uint32_t>& index;
+      const std::vector<uint32_t>& polygon;
+      PolygonIndex(std::vector<uint32_t>& i, const std::vector<uint32_t>& p) : index(i), polygon(p) {
+        for (uint32_t k = 0; k < p.size(); ++k)
+          if (index[p[k]] == kNone) index[p[k]] = k;  // the first, should an anchor come twice
+      }
+      ~PolygonIndex() {
+        for (uint32_t id : polygon) index[id] = kNone;
+      }
+    } indexed(polygon_index_, polygon);
     auto is_diagonal = [&](uint32_t a, uint32_t b) {
-      size_t ia = std::find(polygon.begin(), polygon.end(), a) - polygon.begin();
-      size_t ib = std::find(polygon.begin(), polygon.end(), b) - polygon.begin();
+      size_t ia = polygon_index_[a], ib = polygon_index_[b];
+      assert(ia != kNone && ib != kNone);
       return (ia + 1) % m != ib && (ib + 1) % m != ia;
     };
     tris.resize(candidates_[r].size());
