@@ -1539,14 +1539,14 @@ ClusterOptions cluster_options(const ApproximateOptions& o, uint32_t clusters) {
 // Iterate + repair rounds from the iteration's current labels, as cluster() does. Returns the next
 // free round number.
 uint32_t converge(BoundaryIteration& it, const ClusterProblem& problem, const Topology& topology,
-                  const ApproximateOptions& o, uint32_t round, Clustering& out) {
+                  const ApproximateOptions& o, uint32_t round, Clustering& out, WorkerPool& pool) {
   for (uint32_t repairs = 0;; ++repairs, ++round) {
     out.converged = run_iterations(it, o.max_iterations, o.progress, round, out);
     std::vector<uint32_t> current = it.labels();
     std::vector<float> generators = it.generators();
     // (repair_connectivity first checks, in two passes, whether anything needs repairing: the usual
     // case after a topology-preserving run, and a quarter of every teleport when it did not.)
-    bool repaired = repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair);
+    bool repaired = repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair, &pool);
     uint32_t restored = restore_cluster_count(problem, topology, generators, current, problem.clusters);
     out.repair.restored_clusters += restored;
     if (!repaired && restored == 0) return round + 1;
@@ -1687,7 +1687,7 @@ class PartitionRefiner {
     if (same_count) it_.relabel(labels);
     else it_.reset(std::move(labels));
     out_.history.push_back(IterationRecord{it_.energy(), 0, 0, round_});
-    round_ = converge(it_, problem_, topology_, o_, round_, out_);
+    round_ = converge(it_, problem_, topology_, o_, round_, out_, pool_);
   }
 
   const Mesh& mesh_;
