@@ -522,7 +522,8 @@ class Mesher {
   WorkerPool& pool_;
   ShapeApproximation& out_;
   const uint32_t nv_, nf_;
-  const bool recolor_from_scratch_;  // detail::mesh_partition_from_scratch: no decrease-only recoloring
+  // detail::mesh_partition_from_scratch: no decrease-only recoloring, no kept crossing tests.
+  const bool recolor_from_scratch_;
   double mean_edge_ = 0;
 
   std::vector<uint8_t> open_;       // per vertex: on a boundary or non-manifold edge
@@ -1104,7 +1105,7 @@ std::vector<uint32_t> Mesher::crossing_splits(uint32_t region, const std::vector
   // `polygon` yet: nothing to split from it then; the round is redone with the new anchors.
   if (chords.size() != m) return splits;
   CachedCrossings& cached = crossings_cache_[region];
-  if (same_polygon(cached.polygon, cached.positions, polygon)) return cached.splits;
+  if (!recolor_from_scratch_ && same_polygon(cached.polygon, cached.positions, polygon)) return cached.splits;
   std::vector<double> deviation(m);
   std::vector<uint32_t> split(m);
   for (size_t i = 0; i < m; ++i) split[i] = farthest(chords[i], 0, chords[i].steps, deviation[i]);

@@ -353,9 +353,10 @@ TEST_CASE("approximate: the result does not depend on the thread count") {
 
 TEST_CASE("mesh_partition: recoloring a region from its changed border gives the coloring from scratch") {
   // Each meshing round that adds anchors colors the regions around them again; mesh_partition does
-  // it from the border vertices whose (distance, color) decreased (approximate.cpp, colored_). On a
-  // scanned elephant many regions take crossing-split anchors round after round: the outputs must
-  // be those of coloring every region from scratch in every round.
+  // it from the border vertices whose (distance, color) decreased (approximate.cpp, colored_), and
+  // keeps a region's crossing test while its polygon is the same (crossings_cache_). On a scanned
+  // elephant many regions take crossing-split anchors round after round: the outputs must be those
+  // of coloring every region and testing its crossings from scratch in every round.
   Mesh m = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
   Topology t = build_topology(m);
   size_t flip_anchors = 0;

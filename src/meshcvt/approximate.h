@@ -231,9 +231,11 @@ ShapeApproximation mesh_partition(const Mesh& mesh, const Topology& topology, co
                                   uint32_t regions, const MeshingOptions& options = {});
 
 namespace detail {
-/// mesh_partition with every region colored from scratch in every meshing round. mesh_partition
-/// colors a region again only from the border vertices whose (distance, color) decreased, which
-/// must give the same colors; the tests compare the two. Same inputs, outputs and errors.
+/// mesh_partition with every region colored from scratch, and its crossing chords tested again,
+/// in every meshing round. mesh_partition colors a region again only from the border vertices
+/// whose (distance, color) decreased, and keeps a region's crossing test while its polygon stays
+/// the same; both must give the same results, and the tests compare the two. Same inputs,
+/// outputs and errors.
 ShapeApproximation mesh_partition_from_scratch(const Mesh& mesh, const Topology& topology,
                                                const std::vector<uint32_t>& labels, uint32_t regions,
                                                const MeshingOptions& options = {});
