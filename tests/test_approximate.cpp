@@ -351,18 +351,26 @@ TEST_CASE("approximate: the result does not depend on the thread count") {
   }
 }
 
+// Approximations of a scanned elephant (tests/data) with 12, 30 and 60 proxies: many of their
+// regions take crossing-split anchors round after round, and several are triangulated directly.
+template <class Check>
+void for_elephant_approximations(Check check) {
+  Mesh m = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
+  Topology t = build_topology(m);
+  for (uint32_t n : {12u, 30u, 60u}) {
+    CAPTURE(n);
+    check(m, t, n, approximate_shape(m, t, with_proxies(n)));
+  }
+}
+
 TEST_CASE("mesh_partition: recoloring a region from its changed border gives the coloring from scratch") {
   // Each meshing round that adds anchors colors the regions around them again; mesh_partition does
   // it from the border vertices whose (distance, color) decreased (approximate.cpp, colored_), and
   // keeps a region's crossing test while its polygon is the same (crossings_cache_). On a scanned
   // elephant many regions take crossing-split anchors round after round: the outputs must be those
   // of coloring every region and testing its crossings from scratch in every round.
-  Mesh m = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
-  Topology t = build_topology(m);
   size_t flip_anchors = 0;
-  for (uint32_t n : {12u, 30u, 60u}) {
-    CAPTURE(n);
-    ShapeApproximation partition = approximate_shape(m, t, with_proxies(n));
+  for_elephant_approximations([&](const Mesh& m, const Topology& t, uint32_t n, const ShapeApproximation& partition) {
     const std::vector<uint32_t>& labels = partition.clustering.labels;
     ShapeApproximation a = mesh_partition(m, t, labels, n);
     ShapeApproximation b = detail::mesh_partition_from_scratch(m, t, labels, n);
@@ -371,7 +379,7 @@ TEST_CASE("mesh_partition: recoloring a region from its changed border gives the
     CHECK(a.mesh.indices == b.mesh.indices);
     CHECK(a.fixes == b.fixes);
     for (const MeshingFix& f : a.fixes) flip_anchors += f.kind == MeshingFix::flip_anchor;
-  }
+  });
   CHECK(flip_anchors > 0);  // rounds that recolor did happen
 }
 
@@ -379,12 +387,8 @@ TEST_CASE("mesh_partition: a direct triangulation is kept while other regions ta
   // A region triangulated directly keeps its triangulation from round to round while its polygon
   // and positions stay the same. Every round numbers the output vertices again (an anchor added
   // elsewhere shifts the ids after it), so what is kept must follow its input vertices.
-  Mesh m = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
-  Topology t = build_topology(m);
   uint32_t reused = 0;
-  for (uint32_t n : {12u, 30u, 60u}) {
-    CAPTURE(n);
-    ShapeApproximation s = approximate_shape(m, t, with_proxies(n));
+  for_elephant_approximations([&](const Mesh&, const Topology&, uint32_t, const ShapeApproximation& s) {
     reused += s.stats.reused_triangulations;
     check_closed_manifold(s);
     CHECK(flipped_triangles(s) == s.stats.flipped_triangles);
@@ -394,7 +398,7 @@ TEST_CASE("mesh_partition: a direct triangulation is kept while other regions ta
       auto begin = s.polygon_vertices.begin() + s.polygon_offsets[r], end = s.polygon_vertices.begin() + s.polygon_offsets[r + 1];
       for (int j = 0; j < 3; ++j) CHECK(std::find(begin, end, s.mesh.indices[3 * k + j]) != end);
     }
-  }
+  });
   CHECK(reused > 0);
 }
 
