@@ -453,10 +453,10 @@ class Mesher {
  public:
   Mesher(const Mesh& mesh, const Topology& topology, const FaceGeometry& geom, const EdgeGraph& edges,
          const std::vector<uint32_t>& labels, uint32_t regions, const Proxies& proxies, const MeshingOptions& options,
-         WorkerPool& pool, ShapeApproximation& out, bool recolor_from_scratch)
+         WorkerPool& pool, ShapeApproximation& out, bool from_scratch)
       : mesh_(mesh), topology_(topology), geom_(geom), graph_(edges), labels_(labels), regions_(regions), proxies_(proxies),
         options_(options), pool_(pool), out_(out), nv_(uint32_t(mesh.vertex_count())),
-        nf_(uint32_t(mesh.face_count())), recolor_from_scratch_(recolor_from_scratch) {}
+        nf_(uint32_t(mesh.face_count())), from_scratch_(from_scratch) {}
 
   void run();
 
@@ -523,7 +523,7 @@ class Mesher {
   ShapeApproximation& out_;
   const uint32_t nv_, nf_;
   // detail::mesh_partition_from_scratch: no decrease-only recoloring, no kept crossing tests.
-  const bool recolor_from_scratch_;
+  const bool from_scratch_;
   double mean_edge_ = 0;
 
   std::vector<uint8_t> open_;       // per vertex: on a boundary or non-manifold edge
@@ -1022,7 +1022,7 @@ void Mesher::recolor() {
     for (size_t p = begin; p < end; ++p)
       for (size_t i = bounds[p]; i < bounds[p + 1]; ++i) {
         const uint32_t r = todo[i];
-        color_region(r, heap, colored_[r] && !recolor_from_scratch_);
+        color_region(r, heap, colored_[r] && !from_scratch_);
         colored_[r] = 1;
       }
   }, /*min_parallel=*/2);
@@ -1105,7 +1105,7 @@ std::vector<uint32_t> Mesher::crossing_splits(uint32_t region, const std::vector
   // `polygon` yet: nothing to split from it then; the round is redone with the new anchors.
   if (chords.size() != m) return splits;
   CachedCrossings& cached = crossings_cache_[region];
-  if (!recolor_from_scratch_ && same_polygon(cached.polygon, cached.positions, polygon)) return cached.splits;
+  if (!from_scratch_ && same_polygon(cached.polygon, cached.positions, polygon)) return cached.splits;
   std::vector<double> deviation(m);
   std::vector<uint32_t> split(m);
   for (size_t i = 0; i < m; ++i) split[i] = farthest(chords[i], 0, chords[i].steps, deviation[i]);
@@ -1144,8 +1144,8 @@ uint32_t Mesher::deviation_split(uint32_t region) const {
 bool Mesher::valid_coloring(uint32_t region, const std::vector<uint32_t>& polygon, std::vector<uint32_t>& tris) const {
   const size_t m = polygon.size();
   if (tris.size() != 3 * (m - 2)) return false;
-  // Position of each output vertex in the polygon.
-  // Set for `polygon` by triangulate(); kNone for ids of no polygon vertex (or of no anchor).
+  // Place of each output vertex in the polygon: polygon_index_, set for `polygon` by triangulate();
+  // kNone for ids of no polygon vertex (or of no anchor yet).
   auto local = [&](uint32_t id) { return id < polygon_index_.size() ? polygon_index_[id] : kNone; };
   std::vector<uint64_t> directed;
   directed.reserve(tris.size());
@@ -1326,7 +1326,7 @@ bool Mesher::triangulate(bool last_round) {
     polygon.assign(polygon_vertices_.begin() + polygon_offsets_[r], polygon_vertices_.begin() + polygon_offsets_[r + 1]);
     const size_t m = polygon.size();
     if (m < 3) continue;  // cannot happen: settle_anchors gives every polygon three anchors
-    // polygon_index_ holds this polygon's positions while the region is looked at.
+    // polygon_index_ gives each vertex of this polygon its place in it while the region is looked at.
     struct PolygonIndex {
       std::vector<uint32_t>& index;
       const std::vector<uint32_t>& polygon;
@@ -1546,7 +1546,8 @@ uint32_t converge(BoundaryIteration& it, const ClusterProblem& problem, const To
     std::vector<uint32_t> current = it.labels();
     std::vector<float> generators = it.generators();
     // (repair_connectivity first checks, in two passes, whether anything needs repairing: the usual
-    // case after a topology-preserving run, and a quarter of every teleport when it did not.)
+    // case after a topology-preserving run. On one thread that check was a quarter of a teleport
+    // that changed nothing, hence the pool.)
     bool repaired = repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair, &pool);
     uint32_t restored = restore_cluster_count(problem, topology, generators, current, problem.clusters);
     out.repair.restored_clusters += restored;
@@ -1865,7 +1866,7 @@ uint32_t make_solid_components(const Mesh& mesh, const Topology& topology, const
 
 ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topology, const FaceGeometry& geom,
                                        std::vector<uint32_t> labels, uint32_t regions, const MeshingOptions& options,
-                                       unsigned threads, bool recolor_from_scratch = false) {
+                                       unsigned threads, bool from_scratch = false) {
   auto t = Clock::now();
   WorkerPool pool(threads);
   ShapeApproximation out;
@@ -1879,7 +1880,7 @@ ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topolog
     proxies = compute_proxies(geom, labels, count);
     out.fixes = partition_fixes;
     out.stats = MeshingStats{};
-    Mesher(mesh, topology, geom, edges, labels, count, proxies, options, pool, out, recolor_from_scratch).run();
+    Mesher(mesh, topology, geom, edges, labels, count, proxies, options, pool, out, from_scratch).run();
     // Regions still with flipped triangles are too curved for one polygon: split them, mesh again.
     std::vector<uint32_t> curved;
     for (const MeshingFix& f : out.fixes)
