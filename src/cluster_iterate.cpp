@@ -207,6 +207,20 @@ inline EdgeTest test_edge(const float* point, const float* weight, const float* 
     t.f_moves = decide_cluster_edge(t.d_gq, t.d_gp, t.d_fq, d_own, weight[g], weight[f]) == EdgeMove::right_to_p;
   return t;
 }
+// Calls visit(g, q, test) for each cluster edge of f: each edge-neighbour g in another cluster q,
+// with that edge's four-case test. f is in p, at distance d_own from p's generator; adj its three
+// neighbours (kNone: none).
+template <class Visit>
+inline void test_cluster_edges(const uint32_t* adj, const uint32_t* labels, const float* point, const float* weight,
+                               const float* gen, uint32_t f, uint32_t p, float d_own, Visit&& visit) {
+  for (int e = 0; e < 3; ++e) {
+    const uint32_t g = adj[e];
+    if (g == kNone) continue;
+    const uint32_t q = labels[g];
+    if (q == p) continue;
+    visit(g, q, test_edge(point, weight, gen, f, g, p, q, d_own));
+  }
+}
 inline double edge_budget(const float* weight, uint32_t f, uint32_t g, float d_own, const EdgeTest& t) {
   auto budget = t.f_moves ? move_budget : stay_budget;
   return f < g ? budget(d_own, t.d_fq, t.d_gp, t.d_gq, weight[f], weight[g], true)
@@ -471,18 +485,13 @@ void BoundaryIteration::evaluate_range(size_t begin, size_t end, unsigned worker
     float best_d = 0;
     uint32_t best = kNone;
     double budget = 1e30;
-    for (int e = 0; e < 3; ++e) {
-      uint32_t g = adj[e];
-      if (g == kNone) continue;
-      uint32_t q = labels_[g];
-      if (q == p) continue;
-      const EdgeTest t = test_edge(point, weight, gen, f, g, p, q, d_own);
+    test_cluster_edges(adj, labels_.data(), point, weight, gen, f, p, d_own, [&](uint32_t g, uint32_t q, const EdgeTest& t) {
       if (t.f_moves && (best == kNone || better_destination(t.d_fq, q, best_d, best))) {
         best = q;
         best_d = t.d_fq;
       }
       if (accelerate_ && best == kNone) budget = std::min(budget, edge_budget(weight, f, g, d_own, t));
-    }
+    });
     if (accelerate_) eval_stamp_[f] = iteration_;
     if (best != kNone) {
       proposal_state_[f] = proposal_state_[f] == kRefusedByDisk && destination_[f] == best ? kProposedAgain : kProposed;
@@ -510,15 +519,10 @@ float BoundaryIteration::proposal_budget(uint32_t f) const {
   const float d_own = squared_distance(xf, gen + 3 * size_t(p));
   const float best_d = squared_distance(xf, gen + 3 * size_t(best));
   double budget = 1e30;
-  for (int e = 0; e < 3; ++e) {
-    uint32_t g = adj[e];
-    if (g == kNone) continue;
-    uint32_t q = labels_[g];
-    if (q == p) continue;
-    const EdgeTest t = test_edge(point, weight, gen, f, g, p, q, d_own);
+  test_cluster_edges(adj, labels_.data(), point, weight, gen, f, p, d_own, [&](uint32_t g, uint32_t q, const EdgeTest& t) {
     budget = std::min(budget, edge_budget(weight, f, g, d_own, t));
     if (t.f_moves && q != best) budget = std::min(budget, comparison_budget(single_side(best_d), single_side(t.d_fq)));
-  }
+  });
   return float_budget(budget);
 }
 
