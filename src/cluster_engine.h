@@ -254,8 +254,20 @@ class BoundaryIteration final : public IterationEngine {
 /// The disk tests (a) and (b) of the topology-preserving filter: moving `face` from its cluster to
 /// `destination` keeps the faces of the source cluster in the face's vertex ring non-empty and
 /// edge-connected without it, and the destination's faces in that ring edge-connected.
+/// As the engine decides it: from the cyclic order of the ring where every corner of the face has
+/// one closed fan, otherwise by the adjacency between the ring's faces (the two give the same answer).
 bool move_keeps_disks(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels, uint32_t face,
                       uint32_t destination);
+/// The same tests by adjacency between the ring's faces alone: any ring (boundaries, non-manifold
+/// corners), the reference for the cyclic reading.
+bool move_keeps_disks_by_adjacency(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                                   uint32_t face, uint32_t destination);
+/// The cyclic reading alone: 1 keeps, 0 breaks, -1 when it does not apply (a boundary or
+/// non-manifold edge or corner, a collapsed face, more than 64 ring faces, or two faces of the
+/// tested clusters adjacent across an edge the cycle does not follow). `ring`, when given, gets
+/// the ring's faces in cyclic order.
+int move_keeps_disks_by_cycle(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                              uint32_t face, uint32_t destination, std::vector<uint32_t>* ring = nullptr);
 
 /// Runs iterations until no face moves (returns true), `max_iterations`, or a stall (energy not
 /// decreasing for 16 iterations while faces still move: float round-off trading faces; false).

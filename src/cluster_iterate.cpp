@@ -186,6 +186,104 @@ bool ring_keeps_disks(const Topology& topology, const std::vector<uint32_t>& lab
 }
 
 
+// The disk test of ring_keeps_disks read from the ring's cyclic order, without adjacency lookups
+// between its faces: the common case, a face whose three corners each have one closed fan.
+// Around such a face the faces sharing a corner form a cycle in which consecutive faces share an
+// edge (around each corner from one edge-neighbour of the face to the next), so a cluster's faces
+// in the ring are edge-connected exactly when they are one arc of the cycle, unless two of them are
+// also adjacent across their outer edge (a chord, possible only around corners of low valence).
+// `irregular` (anything else: a boundary or non-manifold edge or corner, a collapsed face, more
+// than kMaxRingCycle faces, a chord between two faces of one of the two clusters) sends the caller
+// to the general test; otherwise the answer is the same as ring_keeps_disks', and ring[0..size)
+// holds the same faces as gather_vertex_ring's (in cyclic, not increasing, order).
+enum class RingTest : uint8_t { keeps, breaks, irregular };
+constexpr uint32_t kMaxRingCycle = 64;
+RingTest cyclic_ring_test(const Mesh& mesh, const Topology& topology, const uint32_t* labels, uint32_t face,
+                          uint32_t destination, uint32_t* ring, uint32_t& size) {
+  const uint32_t* indices = mesh.indices.data();
+  const uint32_t* adjacent = topology.face_adjacent.data();
+  const uint32_t* corner = indices + 3 * size_t(face);
+  const uint32_t* across = adjacent + 3 * size_t(face);  // across[e]: edge (corner e, corner e+1)
+  if (across[0] == kNone || across[1] == kNone || across[2] == kNone || across[0] == across[1] ||
+      across[1] == across[2] || across[0] == across[2])
+    return RingTest::irregular;
+  // In a consistently oriented mesh each face crosses the shared edge against its neighbour's
+  // direction, so around a corner the walk enters every face through the edge that starts at the
+  // corner and leaves through the one before it: the adjacency alone gives the next face. Otherwise
+  // the corner is looked up in each face's indices.
+  const bool oriented = topology.orientation_flips == 0;
+  // The fans of the three corners are walked side by side: each step waits for the face it
+  // reads, and three independent walks keep three loads in flight.
+  uint32_t fan[3][kMaxRingCycle], outer[3][kMaxRingCycle];  // outer: across the edge opposite the corner
+  uint32_t count[3] = {0, 0, 0}, previous[3] = {face, face, face}, at[3], left[3];
+  for (int j = 0; j < 3; ++j) {
+    at[j] = across[(j + 2) % 3];  // the corner's first face; its last is across[j]
+    const uint32_t v = corner[j];
+    left[j] = topology.vertex_face_offsets[v + 1] - topology.vertex_face_offsets[v];
+    if (left[j] < 3) return RingTest::irregular;
+    left[j] -= 2;  // faces of the fan other than `face` and the last
+  }
+  for (int walking = 3; walking > 0;) {
+    walking = 0;
+    for (int j = 0; j < 3; ++j) {
+      const uint32_t g = at[j];
+      if (g == across[j]) continue;
+      if (left[j]-- == 0) return RingTest::irregular;  // faces at the corner outside this fan, or a loop
+      const uint32_t* ga = adjacent + 3 * size_t(g);
+      int k;  // g's edge that starts at the corner
+      if (oriented) {
+        k = ga[0] == previous[j] ? 0 : ga[1] == previous[j] ? 1 : ga[2] == previous[j] ? 2 : -1;
+        if (k >= 0 && ga[(k + 1) % 3] == previous[j]) return RingTest::irregular;  // two shared edges
+      } else {
+        const uint32_t* gc = indices + 3 * size_t(g);
+        const uint32_t v = corner[j];
+        k = gc[0] == v ? 0 : gc[1] == v ? 1 : gc[2] == v ? 2 : -1;
+      }
+      if (k < 0) return RingTest::irregular;
+      const uint32_t in = ga[k], out = ga[(k + 2) % 3];
+      uint32_t next;
+      if (in == previous[j] && out != previous[j]) next = out;
+      else if (out == previous[j] && in != previous[j] && !oriented) next = in;
+      else return RingTest::irregular;
+      if (next == kNone) return RingTest::irregular;
+      // The first face is an edge-neighbour of `face`: its edge opposite the corner links it to the
+      // previous corner's fan, not to a face outside the cycle.
+      outer[j][count[j]] = previous[j] == face ? kNone : ga[(k + 1) % 3];
+      fan[j][count[j]++] = g;
+      previous[j] = g;
+      at[j] = next;
+      walking += next != across[j];
+    }
+  }
+  if (left[0] != 0 || left[1] != 0 || left[2] != 0) return RingTest::irregular;  // faces at a corner outside its fan
+  size = count[0] + count[1] + count[2];
+  if (size > kMaxRingCycle) return RingTest::irregular;
+  uint32_t ring_outer[kMaxRingCycle];
+  for (int j = 0, i = 0; j < 3; ++j)
+    for (uint32_t k = 0; k < count[j]; ++k, ++i) {
+      ring[i] = fan[j][k];
+      ring_outer[i] = outer[j][k];
+    }
+  const uint32_t source = labels[face];
+  uint32_t label[kMaxRingCycle];
+  uint64_t bloom = 0;  // a cheap first check of "is h in the ring" for the chords
+  for (uint32_t i = 0; i < size; ++i) {
+    label[i] = labels[ring[i]];
+    bloom |= uint64_t(1) << ((ring[i] * 0x9E3779B1u) >> 26);
+  }
+  uint32_t source_arcs = 0, destination_arcs = 0;
+  for (uint32_t i = 0, before = size - 1; i < size; before = i++) {
+    const uint32_t l = label[i];
+    if (l != source && l != destination) continue;
+    if (l != label[before]) ++(l == source ? source_arcs : destination_arcs);
+    const uint32_t h = ring_outer[i];
+    if (h == kNone || !(bloom >> ((h * 0x9E3779B1u) >> 26) & 1) || labels[h] != l) continue;
+    assert(h != face);  // h would be an edge-neighbour of face, which has two of its corners
+    if (std::find(ring, ring + size, h) != ring + size) return RingTest::irregular;
+  }
+  return source_arcs == 1 && destination_arcs == 1 ? RingTest::keeps : RingTest::breaks;
+}
+
 // The four-case test of the cluster edge between f (in p, at distance d_own from p's generator)
 // and its neighbour g (in q), the edge oriented so that T_l is the lower face id: the three other
 // distances and whether the rule moves f. Also its budget, the outcome's (stay or move).
@@ -526,11 +624,26 @@ float BoundaryIteration::proposal_budget(uint32_t f) const {
   return float_budget(budget);
 }
 
-bool move_keeps_disks(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels, uint32_t face,
-                      uint32_t destination) {
+bool move_keeps_disks_by_adjacency(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                                   uint32_t face, uint32_t destination) {
   std::vector<uint32_t> ring;
   gather_vertex_ring(mesh, topology, face, ring);
   return ring_keeps_disks(topology, labels, ring, face, destination);
+}
+
+int move_keeps_disks_by_cycle(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                              uint32_t face, uint32_t destination, std::vector<uint32_t>* ring) {
+  uint32_t cycle[kMaxRingCycle], size = 0;
+  const RingTest test = cyclic_ring_test(mesh, topology, labels.data(), face, destination, cycle, size);
+  if (test == RingTest::irregular) return -1;
+  if (ring) ring->assign(cycle, cycle + size);
+  return test == RingTest::keeps ? 1 : 0;
+}
+
+bool move_keeps_disks(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels, uint32_t face,
+                      uint32_t destination) {
+  const int by_cycle = move_keeps_disks_by_cycle(mesh, topology, labels, face, destination);
+  return by_cycle >= 0 ? by_cycle == 1 : move_keeps_disks_by_adjacency(mesh, topology, labels, face, destination);
 }
 
 // A face of the vertex ring of `face` moved in the last iteration (its disk tests may differ now).
@@ -655,12 +768,24 @@ IterationRecord BoundaryIteration::step() {
           if (accelerate_) budget_[f] = proposal_budget(f);  // (for its sleep, step 3)
           continue;
         }
-        gather_vertex_ring(mesh_, topology_, f, ring);
+        uint32_t cycle[kMaxRingCycle], cycle_size = 0;
+        const RingTest test = cyclic_ring_test(mesh_, topology_, labels_.data(), f, destination_[f], cycle, cycle_size);
+        bool keeps = test == RingTest::keeps;
+        const uint32_t* faces = cycle;
+        if (test == RingTest::irregular) {
+          gather_vertex_ring(mesh_, topology_, f, ring);
+          keeps = ring_keeps_disks(topology_, labels_, ring, f, destination_[f]);
+          faces = ring.data();
+          cycle_size = uint32_t(ring.size());
+        }
+        // Kept for (c), which looks only at lower face ids.
         ring_worker[i] = w;
         ring_begin[i] = uint32_t(store.size());
-        store.push_back(uint32_t(ring.size()));
-        store.insert(store.end(), ring.begin(), ring.end());
-        if (ring_keeps_disks(topology_, labels_, ring, f, destination_[f]))
+        store.push_back(0);
+        for (uint32_t k = 0; k < cycle_size; ++k)
+          if (faces[k] < f) store.push_back(faces[k]);
+        store[ring_begin[i]] = uint32_t(store.size() - ring_begin[i] - 1);
+        if (keeps)
           proposal_state_[f] = kPassedDiskTests;
         else if (accelerate_)
           budget_[f] = proposal_budget(f);
@@ -677,8 +802,7 @@ IterationRecord BoundaryIteration::step() {
         uint32_t ring_size = *ring++;
         uint32_t from = labels_[f], to = destination_[f];
         for (uint32_t k = 0; k < ring_size; ++k) {
-          uint32_t g = ring[k];
-          if (g >= f) break;  // ring is sorted: only lower ids can outrank f
+          uint32_t g = ring[k];  // (only lower ids are kept: they alone can outrank f)
           if (proposal_state_[g] != kPassedDiskTests) continue;
           uint32_t g_from = labels_[g], g_to = destination_[g];
           if (g_from == from || g_from == to || g_to == from || g_to == to) {

@@ -251,6 +251,84 @@ TEST_CASE("the disk filter refuses moves that split the source or break the dest
   }
 }
 
+TEST_CASE("the disk tests read from the ring's cycle agree with the tests by adjacency") {
+  // Closed, open and non-manifold meshes, one with every third face reversed (the walk around a
+  // corner then reads each face's corners), and one with every fourth face split in three at its
+  // centroid: a face next to a split one has a ring face that meets another across its outer edge
+  // (a chord: the split face's corner of valence 3 is in both).
+  Mesh flipped = test::torus(24, 10);
+  for (size_t f = 0; f < flipped.face_count(); f += 3) std::swap(flipped.indices[3 * f + 1], flipped.indices[3 * f + 2]);
+  Mesh split = test::icosphere(2);
+  for (size_t f = 0, n = split.face_count(); f < n; f += 4) {
+    const uint32_t a = split.indices[3 * f], b = split.indices[3 * f + 1], c = split.indices[3 * f + 2];
+    double p[3];
+    for (int d = 0; d < 3; ++d)
+      p[d] = (double(split.positions[3 * a + d]) + split.positions[3 * b + d] + split.positions[3 * c + d]) / 3;
+    const uint32_t centre = test::add_vertex(split, p[0], p[1], p[2]);
+    split.indices[3 * f + 2] = centre;  // (a, b, centre)
+    test::add_triangle(split, b, c, centre);
+    test::add_triangle(split, c, a, centre);
+  }
+  // Two spheres sharing one vertex: its faces form two fans.
+  Mesh pinched = test::combine(test::icosphere(2), test::icosphere(2), 2.0);
+  const uint32_t half = uint32_t(pinched.vertex_count() / 2);
+  for (uint32_t& v : pinched.indices)
+    if (v == half) v = 0;
+  struct Case {
+    const char* name;
+    Mesh mesh;
+  };
+  const Case cases[] = {{"icosphere", test::icosphere(3)}, {"torus", test::torus(24, 10)},
+                        {"grid", test::grid(12, 12)},      {"grid with wall", test::grid_with_wall(10)},
+                        {"flipped faces", flipped},        {"split faces", split},
+                        {"pinched spheres", pinched}};
+  for (const Case& c : cases) {
+    CAPTURE(c.name);
+    const Mesh& m = c.mesh;
+    Topology t = build_topology(m);
+    const uint32_t nf = uint32_t(m.face_count());
+    ClusterProblem pr = make_cluster_problem(m, options_for(Metric::cvt, nf / 6));
+    size_t cyclic = 0, irregular = 0;
+    std::vector<uint32_t> ring, expected;
+    for (uint64_t seed : {1, 2, 3}) {
+      std::vector<uint32_t> labels = initial_clustering(pr, m, t, Init::random, nf / 6, seed);
+      for (uint32_t f = 0; f < nf; ++f) {
+        expected.clear();
+        for (int j = 0; j < 3; ++j) {
+          uint32_t v = m.indices[3 * size_t(f) + j];
+          for (uint32_t k = t.vertex_face_offsets[v]; k < t.vertex_face_offsets[v + 1]; ++k)
+            if (t.vertex_faces[k] != f) expected.push_back(t.vertex_faces[k]);
+        }
+        std::sort(expected.begin(), expected.end());
+        expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
+        std::set<uint32_t> destinations;
+        for (uint32_t g : expected)
+          if (labels[g] != labels[f]) destinations.insert(labels[g]);
+        for (uint32_t d : destinations) {
+          const bool by_adjacency = move_keeps_disks_by_adjacency(m, t, labels, f, d);
+          const int by_cycle = move_keeps_disks_by_cycle(m, t, labels, f, d, &ring);
+          REQUIRE(move_keeps_disks(m, t, labels, f, d) == by_adjacency);
+          if (by_cycle < 0) {
+            ++irregular;
+            continue;
+          }
+          ++cyclic;
+          REQUIRE(by_cycle == int(by_adjacency));
+          std::sort(ring.begin(), ring.end());
+          REQUIRE(ring == expected);
+        }
+      }
+    }
+    // The cyclic reading covers the ordinary faces; boundaries, the wall and chords fall back.
+    CHECK(cyclic > 0);
+    if (std::string(c.name) == "grid" || std::string(c.name) == "grid with wall" || std::string(c.name) == "split faces" ||
+        std::string(c.name) == "pinched spheres")
+      CHECK(irregular > 0);
+    else
+      CHECK(irregular == 0);
+  }
+}
+
 TEST_CASE("hierarchical initialization gives exactly n connected clusters") {
   Mesh m = test::torus(30, 12);
   Topology t = build_topology(m);
