@@ -231,20 +231,24 @@ RingTest cyclic_ring_test(const Mesh& mesh, const Topology& topology, const uint
       if (left[j]-- == 0) return RingTest::irregular;  // faces at the corner outside this fan, or a loop
       const uint32_t* ga = adjacent + 3 * size_t(g);
       int k;  // g's edge that starts at the corner
+      uint32_t next;
       if (oriented) {
-        k = ga[0] == previous[j] ? 0 : ga[1] == previous[j] ? 1 : ga[2] == previous[j] ? 2 : -1;
-        if (k >= 0 && ga[(k + 1) % 3] == previous[j]) return RingTest::irregular;  // two shared edges
+        // The edge back to the previous face, which must be g's only one: one bit of m.
+        const uint32_t p = previous[j];
+        const unsigned m = unsigned(ga[0] == p) | unsigned(ga[1] == p) << 1 | unsigned(ga[2] == p) << 2;
+        if (m == 0 || (m & (m - 1)) != 0) return RingTest::irregular;
+        k = int(m >> 1);
+        next = ga[(k + 2) % 3];
       } else {
         const uint32_t* gc = indices + 3 * size_t(g);
         const uint32_t v = corner[j];
         k = gc[0] == v ? 0 : gc[1] == v ? 1 : gc[2] == v ? 2 : -1;
+        if (k < 0) return RingTest::irregular;
+        const uint32_t in = ga[k], out = ga[(k + 2) % 3];
+        if (in == previous[j] && out != previous[j]) next = out;
+        else if (out == previous[j] && in != previous[j]) next = in;
+        else return RingTest::irregular;
       }
-      if (k < 0) return RingTest::irregular;
-      const uint32_t in = ga[k], out = ga[(k + 2) % 3];
-      uint32_t next;
-      if (in == previous[j] && out != previous[j]) next = out;
-      else if (out == previous[j] && in != previous[j] && !oriented) next = in;
-      else return RingTest::irregular;
       if (next == kNone) return RingTest::irregular;
       // The first face is an edge-neighbour of `face`: its edge opposite the corner links it to the
       // previous corner's fan, not to a face outside the cycle.
