@@ -365,11 +365,14 @@ void for_elephant_approximations(Check check) {
 
 TEST_CASE("mesh_partition: recoloring a region from its changed border gives the coloring from scratch") {
   // Each meshing round that adds anchors colors the regions around them again; mesh_partition does
-  // it from the border vertices whose (distance, color) decreased (approximate.cpp, colored_), and
-  // keeps a region's crossing test while its polygon is the same (crossings_cache_). On a scanned
-  // elephant many regions take crossing-split anchors round after round: the outputs must be those
-  // of coloring every region and testing its crossings from scratch in every round.
-  size_t flip_anchors = 0;
+  // it from the border vertices whose (distance, color) decreased (approximate.cpp, colored_), keeps
+  // a region's crossing test and the check of its coloring while its polygon is the same
+  // (crossings_cache_, checked_), and after splitting curved regions copies the first coloring of
+  // the regions whose faces and border seeds did not change from the pass before (FirstColorings).
+  // On a scanned elephant many regions take crossing-split anchors round after round, and the
+  // coarser partitions are meshed again after a split: the outputs must be those of coloring every
+  // region, testing its crossings and checking its coloring from scratch in every round.
+  size_t flip_anchors = 0, copied = 0;
   for_elephant_approximations([&](const Mesh& m, const Topology& t, uint32_t n, const ShapeApproximation& partition) {
     const std::vector<uint32_t>& labels = partition.clustering.labels;
     ShapeApproximation a = mesh_partition(m, t, labels, n);
@@ -379,8 +382,11 @@ TEST_CASE("mesh_partition: recoloring a region from its changed border gives the
     CHECK(a.mesh.indices == b.mesh.indices);
     CHECK(a.fixes == b.fixes);
     for (const MeshingFix& f : a.fixes) flip_anchors += f.kind == MeshingFix::flip_anchor;
+    copied += a.stats.copied_colorings;
+    CHECK(b.stats.copied_colorings == 0);
   });
   CHECK(flip_anchors > 0);  // rounds that recolor did happen
+  CHECK(copied > 0);        // and passes after a split
 }
 
 TEST_CASE("mesh_partition: a direct triangulation is kept while other regions take anchors") {

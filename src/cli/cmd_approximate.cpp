@@ -89,7 +89,8 @@ void write_report(const ApproximateArgs& a, const Mesh& mesh, const ReadStats& r
       .value("fix", s.stats.fix_anchors).value("chords", s.stats.chords).end_object();
   j.begin_object("triangulation").value("coloring_regions", s.stats.coloring_regions)
       .value("fallback_regions", s.stats.fallback_regions).value("meshing_rounds", s.stats.meshing_rounds)
-      .value("reused_triangulations", s.stats.reused_triangulations).end_object();
+      .value("reused_triangulations", s.stats.reused_triangulations)
+      .value("copied_colorings", s.stats.copied_colorings).end_object();
   j.begin_array("fixes");
   for (const MeshingFix& f : s.fixes) {
     j.begin_object().value("kind", to_string(f.kind));

@@ -155,6 +155,9 @@ struct MeshingStats {
   uint32_t fallback_regions = 0;      ///< regions triangulated directly (fallback_triangulation)
   uint32_t meshing_rounds = 0;        ///< 1 + rounds redone after anchor_position / flip_anchor fixes
   uint32_t reused_triangulations = 0; ///< direct triangulations kept from an earlier round (same polygon and positions)
+  /// regions whose first coloring in a pass after a split_curved one was copied from the pass
+  /// before (same faces, interior and border seeds)
+  uint32_t copied_colorings = 0;
   uint32_t vertex_anchors = 0;        ///< anchors placed at their mesh vertex (anchor_position)
   uint64_t flipped_triangles = 0;     ///< output triangles facing away from their proxy normal (0 unless reported)
   uint64_t boundary_edges = 0;        ///< output edges with one triangle
