@@ -229,6 +229,7 @@ RingTest cyclic_ring_test(const Mesh& mesh, const Topology& topology, const uint
       const uint32_t g = at[j];
       if (g == across[j]) continue;
       if (left[j]-- == 0) return RingTest::irregular;  // faces at the corner outside this fan, or a loop
+      if (count[j] == kMaxRingCycle) return RingTest::irregular;  // (the whole ring is checked below)
       const uint32_t* ga = adjacent + 3 * size_t(g);
       int k;  // g's edge that starts at the corner
       uint32_t next;
