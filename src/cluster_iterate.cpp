@@ -197,6 +197,9 @@ bool ring_keeps_disks(const Topology& topology, const std::vector<uint32_t>& lab
 // to the general test; otherwise the answer is the same as ring_keeps_disks', and ring[0..size)
 // holds the same faces as gather_vertex_ring's (in cyclic, not increasing, order).
 enum class RingTest : uint8_t { keeps, breaks, irregular };
+// Proposals (a ring walk and a few hundred nanoseconds each) from which the disk tests are split
+// among the workers; the pool's default suits items of a few nanoseconds.
+constexpr size_t kMinParallelDiskTests = 96;
 constexpr uint32_t kMaxRingCycle = 64;
 RingTest cyclic_ring_test(const Mesh& mesh, const Topology& topology, const uint32_t* labels, uint32_t face,
                           uint32_t destination, uint32_t* ring, uint32_t& size) {
@@ -795,7 +798,7 @@ IterationRecord BoundaryIteration::step() {
         else if (accelerate_)
           budget_[f] = proposal_budget(f);
       }
-    });
+    }, kMinParallelDiskTests);
     pool_.run(proposals.size(), [&](size_t b, size_t e, unsigned) {
       for (size_t i = b; i < e; ++i) {
         uint32_t f = proposals[i];
