@@ -1665,7 +1665,8 @@ ClusterOptions cluster_options(const ApproximateOptions& o, uint32_t clusters) {
 // Iterate + repair rounds from the iteration's current labels, as cluster() does. Returns the next
 // free round number.
 uint32_t converge(BoundaryIteration& it, const ClusterProblem& problem, const Topology& topology,
-                  const ApproximateOptions& o, uint32_t round, Clustering& out, WorkerPool& pool) {
+                  const ApproximateOptions& o, uint32_t round, Clustering& out, WorkerPool& pool,
+                  RepairCheck& check) {
   for (uint32_t repairs = 0;; ++repairs, ++round) {
     out.converged = run_iterations(it, o.max_iterations, o.progress, round, out);
     std::vector<uint32_t> current = it.labels();
@@ -1673,7 +1674,8 @@ uint32_t converge(BoundaryIteration& it, const ClusterProblem& problem, const To
     // (repair_connectivity first checks, in two passes, whether anything needs repairing: the usual
     // case after a topology-preserving run. On one thread that check was a quarter of a teleport
     // that changed nothing, hence the pool.)
-    bool repaired = repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair, &pool);
+    bool repaired = repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair, &pool,
+                                        &check);
     uint32_t restored = restore_cluster_count(problem, topology, generators, current, problem.clusters);
     out.repair.restored_clusters += restored;
     if (!repaired && restored == 0) return round + 1;
@@ -1814,7 +1816,7 @@ class PartitionRefiner {
     if (same_count) it_.relabel(labels);
     else it_.reset(std::move(labels));
     out_.history.push_back(IterationRecord{it_.energy(), 0, 0, round_});
-    round_ = converge(it_, problem_, topology_, o_, round_, out_, pool_);
+    round_ = converge(it_, problem_, topology_, o_, round_, out_, pool_, repair_check_);
   }
 
   const Mesh& mesh_;
@@ -1824,6 +1826,7 @@ class PartitionRefiner {
   ClusterProblem problem_;
   WorkerPool pool_;
   BoundaryIteration it_;
+  RepairCheck repair_check_;  // the last repair check, so the next looks only at what changed since
   uint32_t round_ = 0;
 };
 

@@ -279,9 +279,21 @@ bool run_iterations(IterationEngine& it, uint32_t max_iterations,
 /// to the closest adjacent cluster; clusters enclosed by a single other cluster are dissolved).
 /// Returns true when anything changed. Clusters may be left empty. pool (optional): threads for
 /// the check that comes first and usually finds nothing to do; the result does not depend on it.
+/// check (optional): what the last call's check found, kept by a caller that repairs the same
+/// clustering again after a few moves (teleports): the check then walks only the clusters those
+/// moves can affect. The result is the same with or without it.
+struct RepairCheck;
 bool repair_connectivity(const ClusterProblem& problem, const Topology& topology, const std::vector<float>& generators,
                          std::vector<uint32_t>& labels, uint32_t clusters, RepairStats& stats,
-                         WorkerPool* pool = nullptr);
+                         WorkerPool* pool = nullptr, RepairCheck* check = nullptr);
+
+/// The check before repair_connectivity's work, per cluster, and the labels it was made for
+/// (empty: none yet, or the labels were repaired since).
+struct RepairCheck {
+  std::vector<uint32_t> labels;
+  std::vector<uint8_t> whole, open, several;  // one piece; touches a mesh boundary; two or more neighbours
+  std::vector<uint32_t> neighbour;            // its first neighbouring cluster, kNone when none
+};
 
 /// Re-creates empty clusters by splitting the clusters of highest energy in two connected halves.
 /// cluster_component (optional, `clusters` entries): the mesh component each cluster belongs to;

@@ -276,3 +276,57 @@ TEST_CASE("restoring n after dissolving an enclosed cluster does not enclose it 
     }
   }
 }
+
+// repair_connectivity's check with the last check kept (RepairCheck) walks only the clusters that
+// the faces changed since can affect. A cluster can become enclosed without losing or gaining a
+// face (its other neighbour gives way around it): that must be seen as by a check from scratch.
+TEST_CASE("the repair check kept from the last call finds what a check from scratch finds") {
+  Mesh m = test::grid(12, 12);
+  Topology t = build_topology(m);
+  ClusterOptions o = options_for(Metric::cvt, 3);
+  ClusterProblem pr = make_cluster_problem(m, o);
+  auto face = [](uint32_t i, uint32_t j, uint32_t k) { return 2 * (j * 12 + i) + k; };
+  // A: the 2x2 cells at (5..6, 5..6); B: the rest of the left half; C: the rest of the right half.
+  std::vector<uint32_t> labels(m.face_count());
+  for (uint32_t j = 0; j < 12; ++j)
+    for (uint32_t i = 0; i < 12; ++i)
+      for (uint32_t k = 0; k < 2; ++k)
+        labels[face(i, j, k)] = (i >= 5 && i <= 6 && j >= 5 && j <= 6) ? 0 : i < 6 ? 1 : 2;
+  const std::vector<float> generators = generators_of(pr, compute_cluster_sums(pr, labels, 3));
+  auto both = [&](const std::vector<uint32_t>& from, RepairCheck check) {
+    std::vector<uint32_t> kept = from, scratch = from;
+    RepairStats s1, s2;
+    const bool a = repair_connectivity(pr, t, generators, kept, 3, s1, nullptr, &check);
+    const bool b = repair_connectivity(pr, t, generators, scratch, 3, s2, nullptr);
+    CHECK(a == b);
+    CHECK(kept == scratch);
+    CHECK(s1.dissolved_isolated == s2.dissolved_isolated);
+    CHECK(s1.split_pieces == s2.split_pieces);
+    return a;
+  };
+  RepairCheck check;
+  std::vector<uint32_t> valid = labels;
+  RepairStats stats;
+  REQUIRE_FALSE(repair_connectivity(pr, t, generators, valid, 3, stats, nullptr, &check));
+  REQUIRE(check.labels == labels);
+
+  SUBCASE("a move that keeps every cluster valid") {
+    std::vector<uint32_t> moved = labels;
+    moved[face(6, 0, 1)] = 1;  // the face of C next to B in the bottom row: still three disks
+    CHECK_FALSE(both(moved, check));
+  }
+  SUBCASE("A enclosed by B: C's faces around A's right side go to B, A's own faces do not change") {
+    std::vector<uint32_t> moved = labels;
+    for (uint32_t j = 4; j <= 7; ++j)
+      for (uint32_t i = 5; i <= 7; ++i)
+        for (uint32_t k = 0; k < 2; ++k)
+          if (moved[face(i, j, k)] == 2) moved[face(i, j, k)] = 1;
+    CHECK(both(moved, check));
+  }
+  SUBCASE("C cut in two by a band of B") {
+    std::vector<uint32_t> moved = labels;
+    for (uint32_t i = 6; i < 12; ++i)
+      for (uint32_t k = 0; k < 2; ++k) moved[face(i, 9, k)] = 1;
+    CHECK(both(moved, check));
+  }
+}
