@@ -303,9 +303,12 @@ void check_meshing_options(const MeshingOptions& o) {
 // (the same seed, and the same pops in the same order: the faces it left over before were never
 // accepted, so they never changed a stamp), so skipping it changes nothing; the meshing passes
 // after a split pass only the split regions (3.5 of bunny00's 22 ms per pass).
+// pool (optional): the regions are first regrown side by side (a region's growth reads only its own
+// faces' labels and stamps unique to it: it does not depend on the others), and only those that
+// leave faces over go through the split below, in region order, as they did without it.
 uint32_t make_disk_regions(const Mesh& mesh, const Topology& topology, const FaceGeometry& g,
                            std::vector<uint32_t>& labels, uint32_t regions, std::vector<MeshingFix>& fixes,
-                           const std::vector<uint8_t>* changed = nullptr) {
+                           const std::vector<uint8_t>* changed = nullptr, WorkerPool* pool = nullptr) {
   const uint32_t nf = uint32_t(labels.size());
   std::vector<uint32_t> vertex_stamp(mesh.vertex_count(), 0), face_stamp(nf, 0);
   uint32_t stamp = 0;
@@ -316,28 +319,37 @@ uint32_t make_disk_regions(const Mesh& mesh, const Topology& topology, const Fac
   for (uint32_t f = nf; f-- > 0;)
     if (!g.collapsed[f]) first_face[labels[f]] = f;
 
-  auto grow = [&](uint32_t region, uint32_t seed) {
-    ++stamp;
+  // Grows `region` from `seed` with the stamp `mark` (unique to this growth) in the given stamp
+  // arrays; returns the faces accepted.
+  auto grow_with = [&](uint32_t region, uint32_t seed, uint32_t mark, uint32_t* vertex_mark, std::vector<uint32_t>& queue) {
+    uint32_t accepted = 0;
     queue.assign(1, seed);
     for (size_t head = 0; head < queue.size(); ++head) {
       uint32_t f = queue[head];
-      if (face_stamp[f] == stamp) continue;
+      if (face_stamp[f] == mark) continue;
       const uint32_t* adj = &topology.face_adjacent[3 * size_t(f)];
       int shared = 0, shared_edge = 0;
+      // (Only faces of the region carry its mark: the label test first keeps the growths of
+      // different regions off each other's stamps when they run side by side.)
       for (int e = 0; e < 3; ++e)
-        if (adj[e] != kNone && face_stamp[adj[e]] == stamp) ++shared, shared_edge = e;
+        if (adj[e] != kNone && labels[adj[e]] == region && face_stamp[adj[e]] == mark) ++shared, shared_edge = e;
       if (f != seed) {
         if (shared == 0 || shared == 3) continue;
         // One shared edge: the opposite corner must be new, or the part would touch itself there.
-        if (shared == 1 && vertex_stamp[mesh.indices[3 * size_t(f) + (shared_edge + 2) % 3]] == stamp) continue;
+        if (shared == 1 && vertex_mark[mesh.indices[3 * size_t(f) + (shared_edge + 2) % 3]] == mark) continue;
       }
-      face_stamp[f] = stamp;
-      for (int j = 0; j < 3; ++j) vertex_stamp[mesh.indices[3 * size_t(f) + j]] = stamp;
+      face_stamp[f] = mark;
+      ++accepted;
+      for (int j = 0; j < 3; ++j) vertex_mark[mesh.indices[3 * size_t(f) + j]] = mark;
       for (int e = 0; e < 3; ++e) {
         uint32_t o = adj[e];
-        if (o != kNone && labels[o] == region && face_stamp[o] != stamp && !g.collapsed[o]) queue.push_back(o);
+        if (o != kNone && labels[o] == region && face_stamp[o] != mark && !g.collapsed[o]) queue.push_back(o);
       }
     }
+    return accepted;
+  };
+  auto grow = [&](uint32_t region, uint32_t seed) {
+    grow_with(region, seed, ++stamp, vertex_stamp.data(), queue);
     return stamp;
   };
 
@@ -352,10 +364,32 @@ uint32_t make_disk_regions(const Mesh& mesh, const Topology& topology, const Fac
     for (uint32_t f = 0; f < nf; ++f) region_faces[fill[labels[f]]++] = f;
   }
 
+  // Side by side: each region grown once from its lowest face (the seed the loop below takes), with
+  // stamps 1..regions (the loop's own start above them) and a vertex stamp array per worker. A
+  // region that grows into all of its faces is a disk already: the loop below would find the same
+  // and leave it as it is.
+  std::vector<uint8_t> whole(regions, 0);
+  if (pool != nullptr && pool->size() > 1) {
+    std::vector<uint32_t> non_collapsed(regions, 0);
+    for (uint32_t f = 0; f < nf; ++f) non_collapsed[labels[f]] += !g.collapsed[f];
+    std::vector<std::vector<uint32_t>> worker_marks(pool->size());
+    pool->run(regions, [&](size_t begin, size_t end, unsigned w) {
+      std::vector<uint32_t>& marks = worker_marks[w];
+      marks.assign(mesh.vertex_count(), 0);
+      std::vector<uint32_t> own_queue;
+      for (size_t r = begin; r < end; ++r) {
+        if (first_face[r] == kNone || (changed && !(*changed)[r])) continue;
+        const uint32_t r32 = uint32_t(r);
+        whole[r] = grow_with(r32, first_face[r], r32 + 1, marks.data(), own_queue) == non_collapsed[r];
+      }
+    }, /*min_parallel=*/2);
+    stamp = regions;
+  }
+
   uint32_t count = regions;
   std::vector<uint32_t> members, component_queue;
   for (uint32_t r = 0; r < regions; ++r) {
-    if (first_face[r] == kNone || (changed && !(*changed)[r])) continue;
+    if (first_face[r] == kNone || (changed && !(*changed)[r]) || whole[r]) continue;
     // Work list of (region id, its faces): the region itself, then the pieces split off it.
     members.assign(region_faces.begin() + face_offsets[r], region_faces.begin() + face_offsets[r + 1]);
     std::vector<std::pair<uint32_t, std::vector<uint32_t>>> work;
@@ -2010,7 +2044,7 @@ ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topolog
   ShapeApproximation out;
   out.partition_proxies = regions;
   std::vector<MeshingFix> partition_fixes;  // region splits, kept over the passes
-  uint32_t count = make_disk_regions(mesh, topology, geom, labels, regions, partition_fixes);
+  uint32_t count = make_disk_regions(mesh, topology, geom, labels, regions, partition_fixes, nullptr, &pool);
   count = make_solid_components(mesh, topology, geom, labels, count, partition_fixes);
   const EdgeGraph edges = edge_graph(mesh, topology, geom, pool);
   Proxies proxies;
@@ -2032,7 +2066,7 @@ ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topolog
     std::vector<uint8_t> changed(count, 0);  // the split regions and their new halves
     for (uint32_t r : curved) changed[r] = 1;
     std::fill(changed.begin() + before, changed.end(), uint8_t(1));
-    count = make_disk_regions(mesh, topology, geom, labels, count, partition_fixes, &changed);
+    count = make_disk_regions(mesh, topology, geom, labels, count, partition_fixes, &changed, &pool);
   }
   out.regions = count;
   out.labels = std::move(labels);
