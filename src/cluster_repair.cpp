@@ -39,17 +39,29 @@ struct UnionFind {
   }
 };
 
-// Piece (connected part of a cluster) of every face, as the piece's lowest face id.
-std::vector<uint32_t> cluster_pieces(const Topology& topology, const std::vector<uint32_t>& labels) {
+// What nothing_to_repair's walks found when they found something to repair: each cluster's lowest
+// face and whether the walk from it reached all of its faces.
+struct ClusterWalks {
+  std::vector<uint32_t> first;
+  std::vector<uint8_t> whole;
+};
+
+// Piece (connected part of a cluster) of every face, as the piece's lowest face id. With `walks`,
+// a whole cluster is one piece, its lowest face: only the faces of split clusters are joined.
+std::vector<uint32_t> cluster_pieces(const Topology& topology, const std::vector<uint32_t>& labels,
+                                     const ClusterWalks* walks = nullptr) {
   uint32_t nf = uint32_t(labels.size());
+  auto whole = [&](uint32_t f) { return walks != nullptr && walks->whole[labels[f]]; };
   UnionFind uf(nf);
-  for (uint32_t f = 0; f < nf; ++f)
+  for (uint32_t f = 0; f < nf; ++f) {
+    if (whole(f)) continue;
     for (int e = 0; e < 3; ++e) {
       uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
       if (o != kNone && o > f && labels[o] == labels[f]) uf.join(f, o);
     }
+  }
   std::vector<uint32_t> piece(nf);
-  for (uint32_t f = 0; f < nf; ++f) piece[f] = uf.find(f);
+  for (uint32_t f = 0; f < nf; ++f) piece[f] = whole(f) ? walks->first[labels[f]] : uf.find(f);
   return piece;
 }
 
@@ -71,8 +83,9 @@ std::vector<uint32_t> isolated_clusters(const Topology& topology, const std::vec
 // since, or hold a face next to one that changed cluster, are walked: any other cluster has the
 // same faces and the same clusters around them, so the same findings. (A teleport of bunny00 ->
 // 100 l21 changes a tenth of the clusters; the full check was ~0.9 ms of each.)
+// `walks` (optional) gets the walks' findings when the answer is false.
 bool nothing_to_repair(const Topology& topology, const std::vector<uint32_t>& labels, uint32_t clusters,
-                       WorkerPool* pool, RepairCheck* memo) {
+                       WorkerPool* pool, RepairCheck* memo, ClusterWalks* walks = nullptr) {
   const uint32_t nf = uint32_t(labels.size());
   auto run = [&](size_t count, const std::function<void(size_t, size_t, unsigned)>& fn, size_t min_parallel) {
     if (pool) pool->run(count, fn, min_parallel);
@@ -181,6 +194,10 @@ bool nothing_to_repair(const Topology& topology, const std::vector<uint32_t>& la
       *memo = RepairCheck{};  // the caller repairs: the labels change in ways not followed here
     }
   }
+  if (walks && !nothing) {
+    walks->first = std::move(first);
+    walks->whole = std::move(whole);  // (not moved into the memo: that happens only when nothing)
+  }
   return nothing;
 }
 
@@ -193,8 +210,9 @@ bool repair_connectivity(const ClusterProblem& problem, const Topology& topology
   // The usual case after a run (the topology-preserving step keeps clusters connected): nothing
   // split, nothing enclosed, nothing to do; checked (in parallel with a pool) before the serial
   // work below.
-  if (nothing_to_repair(topology, labels, clusters, pool, check)) return false;
-  std::vector<uint32_t> piece = cluster_pieces(topology, labels);
+  ClusterWalks walks;
+  if (nothing_to_repair(topology, labels, clusters, pool, check, &walks)) return false;
+  std::vector<uint32_t> piece = cluster_pieces(topology, labels, &walks);
 
   // Largest piece of every cluster, by weight, ties to the lower piece id.
   std::vector<double> piece_weight(nf, 0.0);
@@ -229,13 +247,16 @@ bool repair_connectivity(const ClusterProblem& problem, const Topology& topology
   stats.split_pieces += pieces_dropped;
   stats.reassigned_faces += orphans;
 
-  // Rounds: an orphan next to a settled face joins the closest such neighbouring cluster.
-  std::vector<uint32_t> frontier, next_labels;
+  // Rounds: an orphan next to a settled face joins the closest such neighbouring cluster. The
+  // orphans left are kept in a list (in face order), so a round looks at them, not at every face.
+  std::vector<uint32_t> frontier, next_labels, left_over;
+  left_over.reserve(orphans);
+  for (uint32_t f = 0; f < nf; ++f)
+    if (orphan[f]) left_over.push_back(f);
   for (uint64_t left = orphans; left > 0;) {
     frontier.clear();
     next_labels.clear();
-    for (uint32_t f = 0; f < nf; ++f) {
-      if (!orphan[f]) continue;
+    for (uint32_t f : left_over) {
       uint32_t best = kNone;
       float best_d = 0;
       for (int e = 0; e < 3; ++e) {
@@ -256,6 +277,8 @@ bool repair_connectivity(const ClusterProblem& problem, const Topology& topology
       orphan[frontier[i]] = 0;
     }
     left -= frontier.size();
+    left_over.erase(std::remove_if(left_over.begin(), left_over.end(), [&](uint32_t f) { return !orphan[f]; }),
+                    left_over.end());
   }
   return true;
 }

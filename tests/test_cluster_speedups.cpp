@@ -328,5 +328,18 @@ TEST_CASE("the repair check kept from the last call finds what a check from scra
     for (uint32_t i = 6; i < 12; ++i)
       for (uint32_t k = 0; k < 2; ++k) moved[face(i, 9, k)] = 1;
     CHECK(both(moved, check));
+    // The repair itself: C keeps its larger piece (rows 0-8), the two rows above the band go to
+    // B, the only cluster next to them.
+    RepairStats s;
+    REQUIRE(repair_connectivity(pr, t, generators, moved, 3, s, nullptr));
+    CHECK(s.split_pieces == 1);
+    for (uint32_t j = 0; j < 12; ++j)
+      for (uint32_t i = 6; i < 12; ++i)
+        for (uint32_t k = 0; k < 2; ++k) {
+          CAPTURE(i);
+          CAPTURE(j);
+          const uint32_t expected = i == 6 && j >= 5 && j <= 6 ? 0u : j < 9 ? 2u : 1u;  // A, C, B
+          CHECK(moved[face(i, j, k)] == expected);
+        }
   }
 }
