@@ -42,8 +42,8 @@ struct UnionFind {
 // What nothing_to_repair's walks found when they found something to repair: each cluster's lowest
 // face and whether the walk from it reached all of its faces.
 struct ClusterWalks {
-  std::vector<uint32_t> first;
-  std::vector<uint8_t> whole;
+  std::vector<uint32_t> first, neighbour;  // lowest face; first neighbouring cluster (kNone: none)
+  std::vector<uint8_t> whole, open, several;
 };
 
 // Piece (connected part of a cluster) of every face, as the piece's lowest face id. With `walks`,
@@ -194,9 +194,12 @@ bool nothing_to_repair(const Topology& topology, const std::vector<uint32_t>& la
       *memo = RepairCheck{};  // the caller repairs: the labels change in ways not followed here
     }
   }
-  if (walks && !nothing) {
+  if (walks && !nothing) {  // (the memo took the arrays only when nothing is to repair)
     walks->first = std::move(first);
-    walks->whole = std::move(whole);  // (not moved into the memo: that happens only when nothing)
+    walks->whole = std::move(whole);
+    walks->open = std::move(open);
+    walks->several = std::move(several);
+    walks->neighbour = std::move(neighbour);
   }
   return nothing;
 }
@@ -234,8 +237,17 @@ bool repair_connectivity(const ClusterProblem& problem, const Topology& topology
   for (uint32_t f = 0; f < nf; ++f)
     if (kept[labels[f]] != piece[f]) orphan[f] = 1, ++orphans;
 
-  // Isolated clusters are dissolved into their enclosing cluster.
-  std::vector<uint32_t> isolated = isolated_clusters(topology, labels, clusters);
+  // Isolated clusters are dissolved into their enclosing cluster. When every cluster is whole the
+  // check's walks saw all of each cluster's neighbours: the same test as the cluster graph's.
+  std::vector<uint32_t> isolated;
+  if (std::all_of(walks.whole.begin(), walks.whole.end(), [](uint8_t w) { return w != 0; })) {
+    for (uint32_t c = 0; c < clusters; ++c) {
+      const uint32_t n = walks.neighbour[c];
+      if (!walks.open[c] && n != kNone && !walks.several[c] && walks.several[n]) isolated.push_back(c);
+    }
+  } else {
+    isolated = isolated_clusters(topology, labels, clusters);
+  }
   if (!isolated.empty()) {
     std::vector<uint8_t> dissolve(clusters, 0);
     for (uint32_t c : isolated) dissolve[c] = 1;

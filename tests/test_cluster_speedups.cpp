@@ -322,6 +322,12 @@ TEST_CASE("the repair check kept from the last call finds what a check from scra
         for (uint32_t k = 0; k < 2; ++k)
           if (moved[face(i, j, k)] == 2) moved[face(i, j, k)] = 1;
     CHECK(both(moved, check));
+    // The repair itself: A is dissolved into B, which encloses it; nothing else changes.
+    std::vector<uint32_t> repaired = moved;
+    RepairStats s;
+    REQUIRE(repair_connectivity(pr, t, generators, repaired, 3, s, nullptr));
+    CHECK(s.dissolved_isolated == 1);
+    for (size_t f = 0; f < repaired.size(); ++f) CHECK(repaired[f] == (moved[f] == 0 ? 1u : moved[f]));
   }
   SUBCASE("C cut in two by a band of B") {
     std::vector<uint32_t> moved = labels;
