@@ -470,8 +470,8 @@ EdgeGraph edge_graph(const Mesh& mesh, const Topology& topology, const FaceGeome
   }
   // Then each vertex's list without repeats, in order of first appearance (the order does not
   // matter: the coloring's result does not depend on the order in which a vertex's neighbours are
-  // relaxed). Each vertex writes its own
-  // slots: any split of the vertices over the workers gives the same arrays.
+  // relaxed). Each vertex writes its own slots: any split of the vertices over the workers gives
+  // the same arrays.
   pool.run(nv, [&](size_t first, size_t last, unsigned) {
     for (size_t v = first; v < last; ++v) {
       uint32_t* list = out + g.offsets[v];

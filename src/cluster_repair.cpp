@@ -39,11 +39,11 @@ struct UnionFind {
   }
 };
 
-// What nothing_to_repair's walks found when they found something to repair: each cluster's lowest
-// face and whether the walk from it reached all of its faces.
+// What nothing_to_repair's walks found when they found something to repair: the per-cluster
+// findings (RepairCheck's, without labels) and each cluster's lowest face, where its walk started.
 struct ClusterWalks {
-  std::vector<uint32_t> first, neighbour;  // lowest face; first neighbouring cluster (kNone: none)
-  std::vector<uint8_t> whole, open, several;
+  RepairCheck found;
+  std::vector<uint32_t> first;
 };
 
 // Piece (connected part of a cluster) of every face, as the piece's lowest face id. With `walks`,
@@ -51,7 +51,7 @@ struct ClusterWalks {
 std::vector<uint32_t> cluster_pieces(const Topology& topology, const std::vector<uint32_t>& labels,
                                      const ClusterWalks* walks = nullptr) {
   uint32_t nf = uint32_t(labels.size());
-  auto whole = [&](uint32_t f) { return walks != nullptr && walks->whole[labels[f]]; };
+  auto whole = [&](uint32_t f) { return walks != nullptr && walks->found.whole[labels[f]]; };
   UnionFind uf(nf);
   for (uint32_t f = 0; f < nf; ++f) {
     if (whole(f)) continue;
@@ -196,10 +196,10 @@ bool nothing_to_repair(const Topology& topology, const std::vector<uint32_t>& la
   }
   if (walks && !nothing) {  // (the memo took the arrays only when nothing is to repair)
     walks->first = std::move(first);
-    walks->whole = std::move(whole);
-    walks->open = std::move(open);
-    walks->several = std::move(several);
-    walks->neighbour = std::move(neighbour);
+    walks->found.whole = std::move(whole);
+    walks->found.open = std::move(open);
+    walks->found.several = std::move(several);
+    walks->found.neighbour = std::move(neighbour);
   }
   return nothing;
 }
@@ -240,10 +240,11 @@ bool repair_connectivity(const ClusterProblem& problem, const Topology& topology
   // Isolated clusters are dissolved into their enclosing cluster. When every cluster is whole the
   // check's walks saw all of each cluster's neighbours: the same test as the cluster graph's.
   std::vector<uint32_t> isolated;
-  if (std::all_of(walks.whole.begin(), walks.whole.end(), [](uint8_t w) { return w != 0; })) {
+  const RepairCheck& found = walks.found;
+  if (std::all_of(found.whole.begin(), found.whole.end(), [](uint8_t w) { return w != 0; })) {
     for (uint32_t c = 0; c < clusters; ++c) {
-      const uint32_t n = walks.neighbour[c];
-      if (!walks.open[c] && n != kNone && !walks.several[c] && walks.several[n]) isolated.push_back(c);
+      const uint32_t n = found.neighbour[c];
+      if (!found.open[c] && n != kNone && !found.several[c] && found.several[n]) isolated.push_back(c);
     }
   } else {
     isolated = isolated_clusters(topology, labels, clusters);
