@@ -292,6 +292,21 @@ RingTest cyclic_ring_test(const Mesh& mesh, const Topology& topology, const uint
   return source_arcs == 1 && destination_arcs == 1 ? RingTest::keeps : RingTest::breaks;
 }
 
+// Tests (a) and (b) as the engine makes them: from the ring's cycle where cyclic_ring_test applies,
+// else by adjacency between the ring's faces. `ring` gets the vertex ring's faces (in cyclic or in
+// increasing order), kept by step() for test (c).
+bool disk_tests_pass(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels, uint32_t face,
+                     uint32_t destination, std::vector<uint32_t>& ring) {
+  uint32_t cycle[kMaxRingCycle], size = 0;
+  const RingTest test = cyclic_ring_test(mesh, topology, labels.data(), face, destination, cycle, size);
+  if (test != RingTest::irregular) {
+    ring.assign(cycle, cycle + size);
+    return test == RingTest::keeps;
+  }
+  gather_vertex_ring(mesh, topology, face, ring);
+  return ring_keeps_disks(topology, labels, ring, face, destination);
+}
+
 // The four-case test of the cluster edge between f (in p, at distance d_own from p's generator)
 // and its neighbour g (in q), the edge oriented so that T_l is the lower face id: the three other
 // distances and whether the rule moves f. Also its budget, the outcome's (stay or move).
@@ -650,8 +665,8 @@ int move_keeps_disks_by_cycle(const Mesh& mesh, const Topology& topology, const 
 
 bool move_keeps_disks(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels, uint32_t face,
                       uint32_t destination) {
-  const int by_cycle = move_keeps_disks_by_cycle(mesh, topology, labels, face, destination);
-  return by_cycle >= 0 ? by_cycle == 1 : move_keeps_disks_by_adjacency(mesh, topology, labels, face, destination);
+  std::vector<uint32_t> ring;
+  return disk_tests_pass(mesh, topology, labels, face, destination, ring);
 }
 
 // A face of the vertex ring of `face` moved in the last iteration (its disk tests may differ now).
@@ -776,22 +791,13 @@ IterationRecord BoundaryIteration::step() {
           if (accelerate_) budget_[f] = proposal_budget(f);  // (for its sleep, step 3)
           continue;
         }
-        uint32_t cycle[kMaxRingCycle], cycle_size = 0;
-        const RingTest test = cyclic_ring_test(mesh_, topology_, labels_.data(), f, destination_[f], cycle, cycle_size);
-        bool keeps = test == RingTest::keeps;
-        const uint32_t* faces = cycle;
-        if (test == RingTest::irregular) {
-          gather_vertex_ring(mesh_, topology_, f, ring);
-          keeps = ring_keeps_disks(topology_, labels_, ring, f, destination_[f]);
-          faces = ring.data();
-          cycle_size = uint32_t(ring.size());
-        }
+        const bool keeps = disk_tests_pass(mesh_, topology_, labels_, f, destination_[f], ring);
         // Kept for (c), which looks only at lower face ids.
         ring_worker[i] = w;
         ring_begin[i] = uint32_t(store.size());
         store.push_back(0);
-        for (uint32_t k = 0; k < cycle_size; ++k)
-          if (faces[k] < f) store.push_back(faces[k]);
+        for (uint32_t g : ring)
+          if (g < f) store.push_back(g);
         store[ring_begin[i]] = uint32_t(store.size() - ring_begin[i] - 1);
         if (keeps)
           proposal_state_[f] = kPassedDiskTests;
