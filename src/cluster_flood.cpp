@@ -255,6 +255,10 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
           } else if (!(mark_bits[g >> 6] >> (g & 63) & 1)) {  // only faces of c: no other walk writes them
             mark_bits[g >> 6] |= uint64_t(1) << (g & 63);
             queue[tail++] = g;
+            // Its neighbours are read when it leaves the queue, tens of faces later: the walk's
+            // order defeats the hardware prefetcher, and this load was its largest stall (4.8M
+            // bunny -> 10k: Lloyd steps 1.70-1.72 -> 1.50-1.53 s).
+            __builtin_prefetch(adjacent + 3 * size_t(g));
           }
         }
       }
