@@ -114,13 +114,19 @@ void build_cluster_graph(const Topology& topology, const std::vector<uint32_t>& 
 /// touches one neighbour and is still a disk. Increasing cluster order.
 std::vector<uint32_t> enclosed_clusters(const ClusterGraph& graph);
 
+/// What lloyd_flood_steps did: steps kept, by kind (cluster_flood.cpp), and the assignments alone
+/// that were undone because the full step after them failed.
+struct LloydCounts {
+  uint32_t full = 0, assignment = 0, undone = 0;
+};
+
 /// Lloyd steps by constrained flooding (cluster_flood.cpp): at most `max_steps`, each kept only if it
-/// lowers the energy, stopping once a step gains less than `min_relative_gain` of the energy.
+/// lowers the energy, stopping once a full step gains less than `min_relative_gain` of the energy.
 /// Clusters stay non-empty and connected. Returns the number of steps kept. final_graph
-/// (optional): receives the cluster graph of the final labels.
+/// (optional): receives the cluster graph of the final labels. counts (optional): the steps by kind.
 uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topology, WorkerPool& pool,
                            std::vector<uint32_t>& labels, uint32_t max_steps, double min_relative_gain,
-                           ClusterGraph* final_graph = nullptr);
+                           ClusterGraph* final_graph = nullptr, LloydCounts* counts = nullptr);
 
 /// One engine running the boundary-testing iteration: the CPU's BoundaryIteration below, or the
 /// GPU's (host/). Both must take exactly the same decisions; the driver in cluster.cpp does the rest

@@ -21,6 +21,18 @@
 // is unchanged (the new clusters' own centroids), and a step that fails it is retried without the
 // extrapolation. On the 1.2M bunny -> 10k, with the steps stopping at a 0.5% gain as they then
 // did: energy after the steps 9.89e-5 -> 9.48e-5, iterations after them 234 -> 162 (m = 0.8).
+//
+// Assignments alone: most of a step's time is the walk that keeps each cluster's connected piece
+// (and lists the clusters' new neighbours), yet after the first steps it sends only a few faces
+// in a million elsewhere. So once a full step gains less than 5%, three steps in four are the
+// assignment alone: the faces take their closest generators, the sums follow, and the candidates
+// stay those of the last full step. The full step after them restores connected clusters (their
+// stray pieces are orphans like any other) and checks enclosed clusters; only a full step can end
+// the steps. If it fails, the labels go back to those before the assignments alone, and every step
+// after that is full. The energy never rises: each assignment is kept only if it lowers it, and
+// the full step after it too. The 4.8M bunny -> 10k: 24 steps 1.50 s -> 26 steps 0.95-0.98 s,
+// energy after iterating 9.0698e-5 -> 9.0695e-5; on 494 runs of libcgal-demo meshes (cvt and
+// ccvt, 40 / 300 / 1000 clusters) the energies differ by -14% to +5%, geometric mean -0.04%.
 #include <algorithm>
 #include <bit>
 #include <cassert>
@@ -36,6 +48,10 @@ namespace {
 
 // Extrapolation of the generators in each Lloyd step (see the top of the file); 0: plain Lloyd.
 constexpr double kLloydMomentum = 0.8;
+// Assignments alone (see the top of the file): kAssignmentOnlySteps of them after each full step,
+// once a full step gains less than kAssignmentOnlyBelowGain of the energy.
+constexpr uint32_t kAssignmentOnlySteps = 3;
+constexpr double kAssignmentOnlyBelowGain = 0.05;
 
 double total_energy(const ClusterProblem& problem, const std::vector<int64_t>& sums, const std::vector<float>& generators) {
   double e = 0;
@@ -61,10 +77,12 @@ struct StepScratch {
 // their cluster graph (`out_graph`, as build_cluster_graph would make it) and the change of the
 // cluster sums (`delta`, clusters x kSumComponents, eq. 8's centroid variations).
 // Returns false when a cluster would end up empty (the step is then not used).
+// connect false: step 1 alone (an assignment alone): `out` may hold a cluster in pieces, and
+// out_graph is `graph`, unchanged.
 bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const std::vector<uint32_t>& labels,
                   const ClusterGraph& graph, const std::vector<float>& generators, WorkerPool& pool,
                   std::vector<uint32_t>& out, ClusterGraph& out_graph, std::vector<int64_t>& delta,
-                  StepScratch& scratch) {
+                  StepScratch& scratch, bool connect) {
   const uint32_t nf = problem.face_count, nc = problem.clusters;
   const float* point = problem.point.data();
   const uint32_t* adjacent = topology.face_adjacent.data();
@@ -162,6 +180,12 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
         seed_d = worker_distance[size_t(w) * nc + c];
       }
     }
+  }
+
+  if (!connect) {  // the assignment alone (see lloyd_flood_steps); the candidates stay
+    if (std::find(seed.begin(), seed.end(), kNone) != seed.end()) return false;
+    out_graph = graph;
+    return true;
   }
 
   // Each cluster's face closest to its generator under `assignment` (kNone for a cluster with no
@@ -396,7 +420,8 @@ bool voronoi_step(const ClusterProblem& problem, const Topology& topology, const
 
 uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topology, WorkerPool& pool,
                            std::vector<uint32_t>& labels, uint32_t max_steps, double min_relative_gain,
-                           ClusterGraph* final_graph) {
+                           ClusterGraph* final_graph, LloydCounts* counts) {
+  if (counts) *counts = LloydCounts{};
   if (problem.clusters == 0 || max_steps == 0) {
     if (final_graph) build_cluster_graph(topology, labels, problem.clusters, *final_graph, &pool);
     return 0;
@@ -414,7 +439,18 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
   std::vector<float> next_generators;
   double momentum = kLloydMomentum, next_energy = 0;
   uint32_t kept = 0;
+  struct {
+    std::vector<uint32_t> labels;
+    std::vector<int64_t> sums;
+    std::vector<float> generators, previous;
+    double energy = 0;
+  } checkpoint;                // the state before the last assignment alone
+  bool connected = true;       // the labels come from a full step (or the initialization)
+  uint32_t in_row = 0;         // assignments alone since the last full step
+  bool alternate = false;      // full steps and assignments alone in turn
+  bool may_alternate = true;   // false once an assignment alone, or the full step after it, failed
   for (uint32_t step = 0; step < max_steps; ++step) {
+    const bool connect = !(alternate && in_row < kAssignmentOnlySteps);
     bool extrapolated = false;  // the guide differs from the generators (else a failure is final)
     for (size_t i = 0; i < generators.size(); ++i) {
       guide[i] = float(double(generators[i]) + momentum * (double(generators[i]) - double(previous[i])));
@@ -425,8 +461,8 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
     // topology-preserving iteration until repair dissolves it. The graph of the new labels is
     // also the next step's list of candidate clusters.
     auto try_step = [&] {
-      if (!voronoi_step(problem, topology, labels, graph, guide, pool, next, next_graph, delta, scratch)) return false;
-      if (enclosed_clusters(next_graph).size() > enclosed) return false;
+      if (!voronoi_step(problem, topology, labels, graph, guide, pool, next, next_graph, delta, scratch, connect)) return false;
+      if (connect && enclosed_clusters(next_graph).size() > enclosed) return false;
       next_sums = sums;
       for (size_t i = 0; i < sums.size(); ++i) next_sums[i] += delta[i];
       next_generators = generators_of(problem, next_sums);
@@ -434,6 +470,25 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
       return next_energy < energy;
     };
     if (!try_step()) {
+      if (!connect) {  // an assignment alone failed: a full step from the same state
+        alternate = may_alternate = false;
+        continue;
+      }
+      if (!connected) {
+        // The full step after assignments alone failed: back to the labels before them, and
+        // full steps only from there.
+        if (counts) counts->undone += in_row, counts->assignment -= in_row;
+        labels.swap(checkpoint.labels);
+        sums.swap(checkpoint.sums);
+        generators.swap(checkpoint.generators);
+        previous.swap(checkpoint.previous);
+        energy = checkpoint.energy;
+        connected = true;
+        alternate = may_alternate = false;
+        kept -= in_row;
+        in_row = 0;
+        continue;
+      }
       // A plain step that fails would fail again: the first step (no previous generators yet)
       // is never retried. (On l21 the first step nearly always fails: 8 ms of 75k faces saved.)
       if (momentum == 0 || !extrapolated) break;
@@ -442,7 +497,16 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
       continue;
     }
     double gain = (energy - next_energy) / energy;
-    labels.swap(next);
+    if (!connect && connected) {  // the connected state, kept to go back to (swapped: no copy)
+      checkpoint.labels.swap(labels);
+      labels.swap(next);  // (`next` gets the checkpoint's old buffer: every step writes it whole)
+      checkpoint.sums = sums;
+      checkpoint.generators = generators;
+      checkpoint.previous = previous;
+      checkpoint.energy = energy;
+    } else {
+      labels.swap(next);
+    }
     std::swap(graph, next_graph);
     sums.swap(next_sums);
     previous.swap(generators);
@@ -450,7 +514,18 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
     energy = next_energy;
     momentum = kLloydMomentum;
     ++kept;
-    if (gain < min_relative_gain) break;
+    if (counts) ++(connect ? counts->full : counts->assignment);
+    connected = connect;
+    in_row = connect ? 0 : in_row + 1;
+    // (The stop and the switch to assignments alone only after full steps: the gain of an
+    // assignment alone is not that of a step that keeps the clusters connected.)
+    if (connect && gain < min_relative_gain) break;
+    if (connect && gain < kAssignmentOnlyBelowGain) alternate = may_alternate;
+  }
+  if (!connected) {  // max_steps reached after assignments alone: the last connected labels
+    if (counts) counts->undone += in_row, counts->assignment -= in_row;
+    labels.swap(checkpoint.labels);
+    kept -= in_row;
   }
   if (final_graph) *final_graph = std::move(graph);
   return kept;

@@ -63,6 +63,51 @@ TEST_CASE("Lloyd steps lower the energy and keep exactly n connected clusters, e
   }
 }
 
+TEST_CASE("Lloyd steps: assignments alone end in connected clusters, also when undone") {
+  const Mesh meshes[] = {scanned_elephant(), test::combine(test::torus(48, 20), test::icosphere(3), 3),
+                         test::grid(30, 20)};
+  LloydCounts total;
+  for (const Mesh& m : meshes) {
+    Topology t = build_topology(m);
+    for (Metric metric : {Metric::cvt, Metric::ccvt})
+      for (uint32_t n : {7u + t.component_count, uint32_t(m.face_count() / 9)})
+        for (uint32_t max_steps : {4u, 5u, 6u, 7u, 12u, 30u}) {
+          CAPTURE(std::string(to_string(metric)));
+          CAPTURE(n);
+          CAPTURE(max_steps);
+          ClusterOptions o = options_for(metric, n);
+          ClusterProblem problem = make_cluster_problem(m, o);
+          std::vector<uint32_t> labels = initial_clustering(problem, m, t, Init::hierarchical, n, 1);
+          const double before = labeling_energy(problem, labels, n);
+          WorkerPool pool(2);
+          ClusterGraph graph, expected;
+          LloydCounts counts;
+          const uint32_t kept = lloyd_flood_steps(problem, t, pool, labels, max_steps, 0.0, &graph, &counts);
+          CHECK(kept == counts.full + counts.assignment);
+          CHECK(labeling_energy(problem, labels, n) <= before);
+          ClusterValidity v = check_clusters(t, labels, n);
+          CHECK(v.empty == 0);
+          CHECK(v.split == 0);
+          // the graph handed on is that of the final labels (after an undo: of the labels restored)
+          build_cluster_graph(t, labels, n, expected);
+          CHECK(graph.open == expected.open);
+          REQUIRE(graph.count == expected.count);
+          for (uint32_t c = 0; c < n; ++c)
+            CHECK(std::equal(graph.neighbours.begin() + graph.offsets[c],
+                             graph.neighbours.begin() + graph.offsets[c] + graph.count[c],
+                             expected.neighbours.begin() + expected.offsets[c]));
+          total.full += counts.full;
+          total.assignment += counts.assignment;
+          total.undone += counts.undone;
+        }
+  }
+  // Both kinds of step ran, and some assignments alone were undone (a failed full step after
+  // them, or max_steps reached in their midst): the cases above went through every path.
+  CHECK(total.full > 0);
+  CHECK(total.assignment > 0);
+  CHECK(total.undone > 0);
+}
+
 TEST_CASE("Lloyd steps: same result on any thread count; cluster() starts lower with them") {
   Mesh m = scanned_elephant();
   Topology t = build_topology(m);
