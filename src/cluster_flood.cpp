@@ -445,8 +445,7 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
     std::vector<float> generators, previous;
     double energy = 0;
   } checkpoint;                // the state before the last assignment alone
-  bool connected = true;       // the labels come from a full step (or the initialization)
-  uint32_t in_row = 0;         // assignments alone since the last full step
+  uint32_t in_row = 0;         // assignments alone since the last full step (0: connected labels)
   bool alternate = false;      // full steps and assignments alone in turn
   bool may_alternate = true;   // false once an assignment alone, or the full step after it, failed
   for (uint32_t step = 0; step < max_steps; ++step) {
@@ -474,7 +473,7 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
         alternate = may_alternate = false;
         continue;
       }
-      if (!connected) {
+      if (in_row > 0) {
         // The full step after assignments alone failed: back to the labels before them, and
         // full steps only from there.
         if (counts) counts->undone += in_row, counts->assignment -= in_row;
@@ -483,7 +482,6 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
         generators.swap(checkpoint.generators);
         previous.swap(checkpoint.previous);
         energy = checkpoint.energy;
-        connected = true;
         alternate = may_alternate = false;
         kept -= in_row;
         in_row = 0;
@@ -497,7 +495,7 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
       continue;
     }
     double gain = (energy - next_energy) / energy;
-    if (!connect && connected) {  // the connected state, kept to go back to (swapped: no copy)
+    if (in_row == 0 && !connect) {  // the connected state, kept to go back to (swapped: no copy)
       checkpoint.labels.swap(labels);
       labels.swap(next);  // (`next` gets the checkpoint's old buffer: every step writes it whole)
       checkpoint.sums = sums;
@@ -515,14 +513,13 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
     momentum = kLloydMomentum;
     ++kept;
     if (counts) ++(connect ? counts->full : counts->assignment);
-    connected = connect;
     in_row = connect ? 0 : in_row + 1;
     // (The stop and the switch to assignments alone only after full steps: the gain of an
     // assignment alone is not that of a step that keeps the clusters connected.)
     if (connect && gain < min_relative_gain) break;
     if (connect && gain < kAssignmentOnlyBelowGain) alternate = may_alternate;
   }
-  if (!connected) {  // max_steps reached after assignments alone: the last connected labels
+  if (in_row > 0) {  // max_steps reached after assignments alone: the last connected labels
     if (counts) counts->undone += in_row, counts->assignment -= in_row;
     labels.swap(checkpoint.labels);
     kept -= in_row;
