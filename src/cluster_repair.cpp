@@ -41,6 +41,14 @@ struct UnionFind {
 
 // What nothing_to_repair's walks found when they found something to repair: the per-cluster
 // findings (RepairCheck's, without labels) and each cluster's lowest face, where its walk started.
+// Cluster c is enclosed by a single other cluster that itself has others around it (the test of
+// enclosed_clusters), from a check's per-cluster findings.
+bool enclosed(const std::vector<uint8_t>& open, const std::vector<uint32_t>& neighbour,
+              const std::vector<uint8_t>& several, uint32_t c) {
+  const uint32_t n = neighbour[c];
+  return !open[c] && n != kNone && !several[c] && several[n];
+}
+
 struct ClusterWalks {
   RepairCheck found;
   std::vector<uint32_t> first;
@@ -182,7 +190,7 @@ bool nothing_to_repair(const Topology& topology, const std::vector<uint32_t>& la
   }, /*min_parallel=*/2);
   bool nothing = true;
   for (uint32_t c = 0; c < clusters && nothing; ++c)
-    nothing = whole[c] && (open[c] || neighbour[c] == kNone || several[c] || !several[neighbour[c]]);  // else enclosed
+    nothing = whole[c] && !enclosed(open, neighbour, several, c);
   if (memo) {
     if (nothing) {
       memo->labels = labels;
@@ -242,10 +250,8 @@ bool repair_connectivity(const ClusterProblem& problem, const Topology& topology
   std::vector<uint32_t> isolated;
   const RepairCheck& found = walks.found;
   if (std::all_of(found.whole.begin(), found.whole.end(), [](uint8_t w) { return w != 0; })) {
-    for (uint32_t c = 0; c < clusters; ++c) {
-      const uint32_t n = found.neighbour[c];
-      if (!found.open[c] && n != kNone && !found.several[c] && found.several[n]) isolated.push_back(c);
-    }
+    for (uint32_t c = 0; c < clusters; ++c)
+      if (enclosed(found.open, found.neighbour, found.several, c)) isolated.push_back(c);
   } else {
     isolated = isolated_clusters(topology, labels, clusters);
   }
