@@ -1,7 +1,8 @@
 // Tests for uniform coarsening (src/coarsen.cpp, src/vertex_placement.cpp): the dual mesh of
 // hand-built clusterings of procedural meshes (sphere, planar grids with and without a hole, torus,
 // wheels), checked with an independent count of the output's topology (V - E + F, boundary loops,
-// edge use, orientation, areas); the defects of broken clusterings; the three vertex placements.
+// edge use, orientation, areas); the defects of broken clusterings; the three vertex placements and
+// the fitting passes after qem.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -14,8 +15,10 @@
 #include <utility>
 #include <vector>
 
+#include "meshcvt/cluster.h"
 #include "meshcvt/coarsen.h"
 #include "meshcvt/error.h"
+#include "meshcvt/quality.h"
 #include "meshcvt/topology.h"
 #include "triangle_bvh.h"
 
@@ -746,6 +749,67 @@ TEST_CASE("coarsen: the result does not depend on the thread count") {
     CHECK(has_defect(a.defects, DualDefect::cluster_not_disk, 0));
     CHECK(a.mesh.face_count() > 500);
   }
+}
+
+TEST_CASE("coarsen: qem's fitting passes put the input on both sides of the coarse mesh") {
+  // A sphere of 32768 faces in 60 clusters: qem's points sit at their clusters' tangent planes, so
+  // the chords between them are inside the sphere; the fitting moves them out.
+  Labeled o = sphere_four_clusters(6);
+  Mesh& sphere = o.mesh;
+  for (size_t v = 0; v < sphere.vertex_count(); ++v) {
+    float* p = &sphere.positions[3 * v];
+    const double r = std::sqrt(double(p[0]) * p[0] + double(p[1]) * p[1] + double(p[2]) * p[2]);
+    for (int d = 0; d < 3; ++d) p[d] = float(p[d] / r);
+  }
+  REQUIRE(sphere.face_count() >= 16384);
+  Topology topology = build_topology(sphere);
+  ClusterOptions co;
+  co.clusters = 60;
+  const std::vector<uint32_t> labels = cluster(sphere, topology, co).labels;
+  // Signed distances of the input's vertices to the coarse mesh: inside (< 0) or outside, by the
+  // side of the nearest coarse triangle's plane.
+  auto mean_signed = [&](const Mesh& coarse) {
+    double total = 0;
+    for (size_t v = 0; v < sphere.vertex_count(); ++v) {
+      const double x[3] = {sphere.positions[3 * v], sphere.positions[3 * v + 1], sphere.positions[3 * v + 2]};
+      double best = INFINITY, side = 0;
+      for (size_t t = 0; t < coarse.face_count(); ++t) {
+        double c[3][3], point[3];
+        for (int j = 0; j < 3; ++j)
+          for (int d = 0; d < 3; ++d) c[j][d] = coarse.positions[3 * size_t(coarse.indices[3 * t + j]) + d];
+        const double d2 = closest_point_on_triangle(x, c[0], c[1], c[2], point);
+        if (d2 < best) {
+          best = d2;
+          const double e1[3] = {c[1][0] - c[0][0], c[1][1] - c[0][1], c[1][2] - c[0][2]};
+          const double e2[3] = {c[2][0] - c[0][0], c[2][1] - c[0][1], c[2][2] - c[0][2]};
+          const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+          side = (x[0] - point[0]) * n[0] + (x[1] - point[1]) * n[1] + (x[2] - point[2]) * n[2] >= 0 ? 1 : -1;
+        }
+      }
+      total += side * std::sqrt(best);
+    }
+    return total / double(sphere.vertex_count());
+  };
+  CoarsenOptions none, fitted, fitted_one_thread;
+  none.placement = fitted.placement = fitted_one_thread.placement = VertexPlacement::qem;
+  none.fit_passes = 0;
+  fitted.threads = 3;  // several parts even on a one-core machine
+  fitted_one_thread.threads = 1;
+  CoarsenResult a = coarsen_clustering(sphere, topology, labels, 60, none);
+  CoarsenResult b = coarsen_clustering(sphere, topology, labels, 60, fitted);
+  REQUIRE(a.defects.empty());
+  CHECK(a.fitted_moves == 0);
+  CHECK(b.fitted_moves > 0);
+  CHECK(b.mesh.indices == a.mesh.indices);  // vertices move, connectivity stays
+  // Without the fitting the sphere is outside the coarse mesh nearly everywhere; with it, on both
+  // sides: the mean signed distance shrinks by far more than half, and so does the RMS distance.
+  const double before = mean_signed(a.mesh), after = mean_signed(b.mesh);
+  CHECK(before > 0);
+  CHECK(std::fabs(after) < 0.25 * before);
+  CHECK(approximation_error(b.mesh, sphere).rms < 0.75 * approximation_error(a.mesh, sphere).rms);
+  // The fixed-point sums make it independent of the thread count.
+  CoarsenResult c = coarsen_clustering(sphere, topology, labels, 60, fitted_one_thread);
+  CHECK(c.mesh.positions == b.mesh.positions);
 }
 
 TEST_CASE("coarsen: arbitrary labels and broken meshes give a mesh, never a crash") {

@@ -27,6 +27,7 @@ struct CoarsenArgs {
   std::string input, output, report, metric = "cvt", placement = "projected", device;
   uint32_t clusters = 0, fix_rounds = CoarsenMeshOptions{}.max_fix_rounds;
   uint32_t relax_passes = CoarsenOptions{}.relax_passes;
+  uint32_t fit_passes = CoarsenOptions{}.fit_passes;
   unsigned threads = 0;
   bool quiet = false, no_weld = false, no_error = false, no_flips = false;
   double gradation = 0;   ///< --gradation g: curvature-adaptive density (meshcvt/density.h); 0 = uniform
@@ -97,6 +98,7 @@ void run_coarsen(const CoarsenArgs& a) {
   co.threads = a.threads;
   co.flip_edges = !a.no_flips;
   co.relax_passes = a.relax_passes;
+  co.fit_passes = a.fit_passes;
 
   prepare_allocator(a.input);
   auto t0 = Clock::now();
@@ -177,7 +179,8 @@ void run_coarsen(const CoarsenArgs& a) {
       j.begin_object("error").value("hausdorff", err.hausdorff).value("hausdorff_rel", err.hausdorff_rel)
           .value("rms", err.rms).value("rms_rel", err.rms_rel).end_object();
     j.value("flipped_edges", r.flipped_edges).value("relax_passes", a.relax_passes)
-        .value("relax_max_normal_turn_deg", co.relax_max_normal_turn_deg).value("relaxed_moves", r.relaxed_moves);
+        .value("relax_max_normal_turn_deg", co.relax_max_normal_turn_deg).value("relaxed_moves", r.relaxed_moves)
+        .value("fit_passes", a.fit_passes).value("fitted_moves", r.fitted_moves);
     j.begin_array("defects");
     for (const DualDefect& d : r.defects)
       j.begin_object().value("kind", to_string(d.kind)).value("cluster", d.cluster).value("other", d.other).end_object();
@@ -254,6 +257,9 @@ const RegisterCommand reg(30, [](CLI::App& app) {
                   "passes moving each coarse vertex over its own cluster toward the middle of its ring where that "
                   "improves its triangles (smallest angle never drops), then edge flips again (default " +
                       std::to_string(CoarsenOptions{}.relax_passes) + "; 0 = off)");
+  sub->add_option("--fit-passes", a->fit_passes,
+                  "with --vertex qem: passes moving each vertex so the input lies on both sides of the coarse mesh "
+                  "(lower RMS distance; default " + std::to_string(CoarsenOptions{}.fit_passes) + "; 0 = off)");
   sub->add_flag("--no-flips", a->no_flips, "keep the dual's triangles as built (no edge flips improving angles)");
   sub->add_flag("--no-weld", a->no_weld, "do not merge vertices with identical positions");
   sub->add_flag("--no-error", a->no_error, "skip measuring the distance to the input");
