@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "meshcvt/coarsen.h"
+#include "coarse_rings.h"
 #include "parallel.h"
 #include "triangle_bvh.h"
 
@@ -72,15 +73,8 @@ uint64_t fit_coarse_vertices(Mesh& coarse, const Mesh& mesh, const std::vector<u
                              unsigned threads) {
   const size_t n = coarse.vertex_count(), faces = mesh.face_count(), triangles = coarse.face_count();
   if (passes == 0 || n == 0 || triangles == 0 || labels.size() != faces) return 0;
-  // Triangles per coarse vertex (CSR).
-  std::vector<uint32_t> ring_offsets(n + 1, 0), ring(3 * triangles);
-  for (uint32_t v : coarse.indices) ++ring_offsets[v + 1];
-  for (size_t i = 0; i < n; ++i) ring_offsets[i + 1] += ring_offsets[i];
-  {
-    std::vector<uint32_t> fill(ring_offsets.begin(), ring_offsets.end() - 1);
-    for (size_t t = 0; t < triangles; ++t)
-      for (int k = 0; k < 3; ++k) ring[fill[coarse.indices[3 * t + k]]++] = uint32_t(t);
-  }
+  std::vector<uint32_t> ring_offsets, ring;  // triangles per coarse vertex (CSR)
+  coarse_triangle_rings(coarse, ring_offsets, ring);
   // Movable: every edge at the vertex is used by exactly two triangles.
   std::vector<uint8_t> movable(n, 1);
   {

@@ -46,6 +46,7 @@
 
 #include "meshcvt/coarsen.h"
 #include "meshcvt/error.h"
+#include "coarse_rings.h"
 #include "parallel.h"
 #include "symmetric_eigen3.h"
 #include "triangle_bvh.h"
@@ -138,15 +139,8 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
     throw OptionError("relax: the normal turn limit must be within [0, 180] degrees");
   if (passes == 0 || n == 0 || triangles == 0) return 0;
 
-  // Triangles per coarse vertex (CSR).
-  std::vector<uint32_t> ring_offsets(n + 1, 0), ring(3 * triangles);
-  for (uint32_t v : coarse.indices) ++ring_offsets[v + 1];
-  for (size_t i = 0; i < n; ++i) ring_offsets[i + 1] += ring_offsets[i];
-  {
-    std::vector<uint32_t> fill(ring_offsets.begin(), ring_offsets.end() - 1);
-    for (size_t t = 0; t < triangles; ++t)
-      for (int k = 0; k < 3; ++k) ring[fill[coarse.indices[3 * t + k]]++] = uint32_t(t);
-  }
+  std::vector<uint32_t> ring_offsets, ring;  // triangles per coarse vertex (CSR)
+  coarse_triangle_rings(coarse, ring_offsets, ring);
   // The face each vertex stands on: given, or walked to from its cluster's first face.
   std::vector<uint32_t> home(n, kNone);
   bool any_missing = start_faces == nullptr || start_faces->size() != n;
