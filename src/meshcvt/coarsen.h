@@ -75,6 +75,7 @@ struct CoarsenOptions {
   /// the tangent planes of a curved cluster and leaves the triangles between such points below the
   /// surface. Default 2, from bench/RESULTS.md (thirteenth session): RMS distance -19% to -49% on
   /// the Table 1 meshes, Hausdorff -24% to +8%; about 60 ms per pass at 1.2M faces on 2 cores.
+  /// Only when the dual has no defect.
   uint32_t fit_passes = 2;
 };
 
