@@ -39,8 +39,6 @@ struct UnionFind {
   }
 };
 
-// What nothing_to_repair's walks found when they found something to repair: the per-cluster
-// findings (RepairCheck's, without labels) and each cluster's lowest face, where its walk started.
 // Cluster c is enclosed by a single other cluster that itself has others around it (the test of
 // enclosed_clusters), from a check's per-cluster findings.
 bool enclosed(const std::vector<uint8_t>& open, const std::vector<uint32_t>& neighbour,
@@ -49,6 +47,8 @@ bool enclosed(const std::vector<uint8_t>& open, const std::vector<uint32_t>& nei
   return !open[c] && n != kNone && !several[c] && several[n];
 }
 
+// What nothing_to_repair's walks found when they found something to repair: the per-cluster
+// findings (RepairCheck's, without labels) and each cluster's lowest face, where its walk started.
 struct ClusterWalks {
   RepairCheck found;
   std::vector<uint32_t> first;
