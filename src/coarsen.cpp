@@ -53,11 +53,12 @@ void check_placement_inputs(const Mesh& mesh, const std::vector<uint32_t>& label
 // Mass centroids in double, 3 per cluster.
 std::vector<double> mass_centroids(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
                                    const std::vector<float>* face_weights);
-std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
+std::vector<float> place_cluster_vertices(const Mesh& mesh, const Topology* topology,
+                                          const std::vector<uint32_t>& labels, uint32_t clusters,
                                           VertexPlacement placement, const std::vector<float>* face_weights,
                                           const std::vector<uint32_t>& vertex_cluster,
                                           const std::vector<double>& centroids, unsigned threads,
-                                          std::vector<uint32_t>* faces);
+                                          std::vector<uint32_t>* faces, const std::vector<uint8_t>* own_planes_only);
 // In coarse_relax.cpp: relax_coarse_vertices, starting from a face per vertex where start_faces
 // gives one (the face under the vertex; kNone or a missing array: found by a walk).
 uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& topology,
@@ -696,9 +697,11 @@ void sort_defects(std::vector<DualDefect>& defects) {
 
 // vertex_faces: when not null, the face under each vertex where the placement knows it (see
 // detail::place_cluster_vertices).
-CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
-                  uint32_t clusters, const CoarsenOptions& options, const std::vector<float>* face_weights,
-                  std::vector<uint32_t>* vertex_faces = nullptr) {
+// own_planes_only: qem only, when not null: clusters (flag 1) whose point ignores the planes lent
+// across their border.
+CoarsenResult build_dual(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                         uint32_t clusters, const CoarsenOptions& options, const std::vector<float>* face_weights,
+                         std::vector<uint32_t>* vertex_faces, const std::vector<uint8_t>* own_planes_only) {
   check_topology(mesh, topology, clusters);
   check_placement_inputs(mesh, labels, clusters, face_weights);
   DualStructure dual;
@@ -736,9 +739,9 @@ CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<
     other.join();
     if (other_error) std::rethrow_exception(other_error);
   }
-  std::vector<float> positions = detail::place_cluster_vertices(mesh, labels, clusters, options.placement,
+  std::vector<float> positions = detail::place_cluster_vertices(mesh, &topology, labels, clusters, options.placement,
                                                                 face_weights, dual.vertex_state, centroids,
-                                                                options.threads, vertex_faces);
+                                                                options.threads, vertex_faces, own_planes_only);
 
   CoarsenResult result;
   cluster_defects(dual, result.defects);
@@ -763,6 +766,26 @@ CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<
   result.mesh.positions = std::move(positions);
   result.mesh.indices = std::move(triangles);
   return result;
+}
+
+// The dual, for `qem` built again when the lent planes gave it degenerate triangles (three
+// clusters pulled onto one straight crease make a triangle of no area): those triangles' clusters
+// then keep the points of their own planes, as without the lending.
+CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+                  uint32_t clusters, const CoarsenOptions& options, const std::vector<float>* face_weights,
+                  std::vector<uint32_t>* vertex_faces = nullptr) {
+  CoarsenResult result = build_dual(mesh, topology, labels, clusters, options, face_weights, vertex_faces, nullptr);
+  if (options.placement != VertexPlacement::qem) return result;
+  std::vector<uint8_t> own_planes_only(clusters, 0);
+  bool degenerate = false;
+  for (const DualDefect& d : result.defects)
+    if (d.kind == DualDefect::degenerate_triangle) {
+      degenerate = true;
+      for (uint32_t v : {d.cluster, d.other, d.third})
+        if (v < clusters) own_planes_only[v] = 1;
+    }
+  if (!degenerate) return result;
+  return build_dual(mesh, topology, labels, clusters, options, face_weights, vertex_faces, &own_planes_only);
 }
 
 }  // namespace

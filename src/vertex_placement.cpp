@@ -6,7 +6,8 @@
 //   projected : the closest point of the cluster's own faces to the mass centroid (the CCVT
 //               generator, eq. 6, restricted to the cluster), exact point-triangle distances.
 //   qem       : the minimizer of the cluster's area-weighted plane quadric (Garland-Heckbert; the
-//               paper's second option, after [24]), solved by eigen-decomposition with small
+//               paper's second option, after [24]), with a share of the planes just across its
+//               border (as ACVD's vertex quadrics), solved by eigen-decomposition with small
 //               eigenvalues truncated toward the mass centroid (Lindstrom's robust solve), then
 //               clamped toward the centroid to stay near the cluster.
 //
@@ -37,6 +38,14 @@ constexpr double kQemRelativeEigenvalueCutoff = 1e-3;
 // The qem point may leave the cluster's bounding box by this fraction of the box diagonal (a ridge
 // or corner point lies just outside the box of a cluster whose faces stop short of it).
 constexpr double kQemBoxMargin = 0.1;
+// The share of the planes of the faces across a cluster's border that its quadric takes (see
+// place_qem). Measured on the Table 1 meshes with the fitting (bench/RESULTS.md, fourteenth
+// session): fandisk's RMS distance 0.0237-0.0245 % of the diagonal at 0.1, 0.0225-0.0231 at 0.3,
+// 0.0225-0.0235 at 1; the smooth meshes' within 1% of each other.
+constexpr double kBorderPlaneShare = 0.3;
+// Two clusters' qem points nearer than this fraction of the smaller cluster's box diagonal are
+// too close (see place_qem).
+constexpr double kDistinctPoints = 0.01;
 // Faces from which `projected` splits its scan over threads (below, starting them costs more).
 constexpr uint32_t kMinParallelProjection = 65536;
 
@@ -281,16 +290,86 @@ std::vector<float> place_projected(const Mesh& mesh, uint32_t clusters, const st
   return positions;
 }
 
-std::vector<float> place_qem(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
-                             const std::vector<double>& centroids, const std::vector<float>* face_weights) {
-  bool weighted = face_weights && !face_weights->empty();
+// The weight (area times face weight; 0 for a degenerate face) and plane (unit normal n, offset d
+// with n . x = d, coordinates relative to `origin`) of face f.
+double face_plane(const Mesh& mesh, size_t f, const double origin[3], const std::vector<float>* face_weights,
+                  double plane[4]) {
+  double n[3];
+  face_cross(mesh, f, n);
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (!(len > 0)) return 0;  // a degenerate face has no plane
+  double w = 0.5 * len;      // area
+  if (face_weights && !face_weights->empty()) w *= (*face_weights)[f];
+  for (int d = 0; d < 3; ++d) plane[d] = n[d] / len;
+  const float* a = vertex(mesh, mesh.indices[3 * f]);
+  plane[3] = plane[0] * (a[0] - origin[0]) + plane[1] * (a[1] - origin[1]) + plane[2] * (a[2] - origin[2]);
+  return w;
+}
+
+// Adds w times the quadric of `plane` to q: A += w n n^T (xx xy xz yy yz zz), b += w d n.
+void add_plane(double q[9], double w, const double plane[4]) {
+  const double* n = plane;
+  q[0] += w * n[0] * n[0];
+  q[1] += w * n[0] * n[1];
+  q[2] += w * n[0] * n[2];
+  q[3] += w * n[1] * n[1];
+  q[4] += w * n[1] * n[2];
+  q[5] += w * n[2] * n[2];
+  q[6] += w * plane[3] * n[0];
+  q[7] += w * plane[3] * n[1];
+  q[8] += w * plane[3] * n[2];
+}
+
+// The minimizer of the quadric q (see add_plane) for a cluster with bounding box bb and mass
+// centroid c (coordinates relative to the origin), into x.
+void solve_quadric(const double q[9], const double bb[6], const double c[3], double out[3]) {
+  double m[3][3] = {{q[0], q[1], q[2]}, {q[1], q[3], q[4]}, {q[2], q[4], q[5]}};
+  // Minimize x^T A x - 2 b^T x: x = c + sum over kept eigenpairs of (u . (b - A c)) / lambda u.
+  double r[3];
+  for (int d = 0; d < 3; ++d) r[d] = q[6 + d] - (m[d][0] * c[0] + m[d][1] * c[1] + m[d][2] * c[2]);
+  double values[3], vectors[3][3];
+  symmetric_eigen3(m, values, vectors);
+  double largest = std::max({values[0], values[1], values[2]});
+  double x[3] = {c[0], c[1], c[2]};
+  if (largest > 0) {
+    for (int k = 0; k < 3; ++k) {
+      if (!(values[k] > kQemRelativeEigenvalueCutoff * largest)) continue;
+      double along = (vectors[0][k] * r[0] + vectors[1][k] * r[1] + vectors[2][k] * r[2]) / values[k];
+      for (int d = 0; d < 3; ++d) x[d] += along * vectors[d][k];
+    }
+  }
+  // Clamp: the largest t in [0, 1] keeping c + t (x - c) inside the grown box. c itself is inside
+  // (a convex combination of points of the cluster; the box is widened to it against rounding).
+  double diagonal = std::sqrt((bb[3] - bb[0]) * (bb[3] - bb[0]) + (bb[4] - bb[1]) * (bb[4] - bb[1]) +
+                              (bb[5] - bb[2]) * (bb[5] - bb[2]));
+  double margin = kQemBoxMargin * diagonal;
+  double t = 1.0;
+  for (int d = 0; d < 3; ++d) {
+    double lo = std::min(bb[d], c[d]) - margin, hi = std::max(bb[3 + d], c[d]) + margin;
+    double step = x[d] - c[d];
+    if (!std::isfinite(step)) {
+      t = 0;
+      continue;
+    }
+    if (c[d] + step > hi) t = std::min(t, (hi - c[d]) / step);
+    if (c[d] + step < lo) t = std::min(t, (lo - c[d]) / step);
+  }
+  t = std::max(t, 0.0);
+  for (int d = 0; d < 3; ++d) out[d] = c[d] + t * (x[d] - c[d]);
+}
+
+// topology: when given, clusters also take a share of the planes across their border (see below),
+// except those flagged in own_planes_only (when not null).
+std::vector<float> place_qem(const Mesh& mesh, const Topology* topology, const std::vector<uint32_t>& labels,
+                             uint32_t clusters, const std::vector<double>& centroids,
+                             const std::vector<float>* face_weights, const std::vector<uint8_t>* own_planes_only) {
   // Coordinates relative to one mesh vertex keep the plane offsets d small where the mesh sits far
   // from the origin.
   double origin[3] = {0, 0, 0};
   if (mesh.vertex_count() > 0)
     for (int d = 0; d < 3; ++d) origin[d] = mesh.positions[d];
   // Per cluster: A = sum w n n^T (xx xy xz yy yz zz), b = sum w d n, and the bounding box.
-  std::vector<double> quadric(9 * size_t(clusters), 0.0);
+  std::vector<double> quadric(9 * size_t(clusters), 0.0), lent(9 * size_t(clusters), 0.0);  // own, lent planes
   std::vector<double> box(6 * size_t(clusters));
   for (uint32_t i = 0; i < clusters; ++i)
     for (int d = 0; d < 3; ++d) {
@@ -307,67 +386,87 @@ std::vector<float> place_qem(const Mesh& mesh, const std::vector<uint32_t>& labe
         bb[3 + d] = std::max(bb[3 + d], p[d] - origin[d]);
       }
     }
-    double n[3];
-    face_cross(mesh, f, n);
-    double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (!(len > 0)) continue;  // a degenerate face has no plane
-    double w = 0.5 * len;      // area
-    if (weighted) w *= (*face_weights)[f];
-    for (double& x : n) x /= len;
-    const float* a = vertex(mesh, mesh.indices[3 * f]);
-    double dist = n[0] * (a[0] - origin[0]) + n[1] * (a[1] - origin[1]) + n[2] * (a[2] - origin[2]);
-    double* q = &quadric[9 * size_t(label)];
-    q[0] += w * n[0] * n[0];
-    q[1] += w * n[0] * n[1];
-    q[2] += w * n[0] * n[2];
-    q[3] += w * n[1] * n[1];
-    q[4] += w * n[1] * n[2];
-    q[5] += w * n[2] * n[2];
-    q[6] += w * dist * n[0];
-    q[7] += w * dist * n[1];
-    q[8] += w * dist * n[2];
+    double plane[4];
+    const double w = face_plane(mesh, f, origin, face_weights, plane);
+    if (w > 0) add_plane(&quadric[9 * size_t(label)], w, plane);
   }
-  std::vector<float> positions(3 * size_t(clusters), 0.0f);
+  if (topology && kBorderPlaneShare > 0) {
+    // Each vertex where clusters meet lends every cluster there a share of the planes of its faces
+    // that belong to the others (a third of the face per corner, as ACVD's vertex quadrics sum the
+    // faces around a vertex). A crease along a cluster border lies in none of the two clusters'
+    // own planes, so without these their points stay on their flat sides and the coarse edge
+    // between them cuts the crease (fandisk -> 1000: RMS 0.048 -> 0.032 % of the diagonal with the
+    // vertex fitting alone); where the surface is smooth the lent planes agree with the own ones.
+    // First the clusters meeting at each vertex (CSR; none where one cluster has all its faces),
+    // then each face's plane once, lent to the other clusters at each of its corners.
+    const std::vector<uint32_t>& offsets = topology->vertex_face_offsets;
+    const std::vector<uint32_t>& around = topology->vertex_faces;
+    const size_t vertices = offsets.size() - 1;
+    std::vector<uint32_t> meeting_offsets(vertices + 1, 0), meeting;
+    for (size_t v = 0; v < vertices; ++v) {
+      const size_t first = meeting.size();
+      for (uint32_t i = offsets[v]; i < offsets[v + 1]; ++i)
+        if (std::find(meeting.begin() + first, meeting.end(), labels[around[i]]) == meeting.end())
+          meeting.push_back(labels[around[i]]);
+      if (meeting.size() - first < 2) meeting.resize(first);
+      meeting_offsets[v + 1] = uint32_t(meeting.size());
+    }
+    for (size_t g = 0; g < mesh.face_count(); ++g) {
+      const uint32_t* corner = &mesh.indices[3 * g];
+      if (meeting_offsets[corner[0] + 1] == meeting_offsets[corner[0]] &&
+          meeting_offsets[corner[1] + 1] == meeting_offsets[corner[1]] &&
+          meeting_offsets[corner[2] + 1] == meeting_offsets[corner[2]])
+        continue;  // inside its cluster
+      double plane[4];
+      const double w = face_plane(mesh, g, origin, face_weights, plane) * (kBorderPlaneShare / 3);
+      if (!(w > 0)) continue;
+      for (int k = 0; k < 3; ++k) {
+        for (uint32_t i = meeting_offsets[corner[k]]; i < meeting_offsets[corner[k] + 1]; ++i)
+          if (meeting[i] != labels[g]) add_plane(&lent[9 * size_t(meeting[i])], w, plane);
+      }
+    }
+  }
+  // Each cluster's point with the lent planes; where two clusters' points nearly meet (two
+  // clusters at a corner of the surface both pulled onto it), the later cluster keeps the point of
+  // its own planes: coincident vertices would give the dual degenerate triangles.
+  std::vector<double> points(3 * size_t(clusters), 0.0), own(3 * size_t(clusters), 0.0), reach(clusters, -1.0);
+  std::vector<uint32_t> order;
   for (uint32_t i = 0; i < clusters; ++i) {
-    const double* q = &quadric[9 * size_t(i)];
     const double* bb = &box[6 * size_t(i)];
     if (!(bb[0] <= bb[3])) continue;  // empty cluster
-    double c[3];
+    double c[3], with_lent[9];
     for (int d = 0; d < 3; ++d) c[d] = centroids[3 * size_t(i) + d] - origin[d];
-    double m[3][3] = {{q[0], q[1], q[2]}, {q[1], q[3], q[4]}, {q[2], q[4], q[5]}};
-    // Minimize x^T A x - 2 b^T x: x = c + sum over kept eigenpairs of (u . (b - A c)) / lambda u.
-    double r[3];
-    for (int d = 0; d < 3; ++d) r[d] = q[6 + d] - (m[d][0] * c[0] + m[d][1] * c[1] + m[d][2] * c[2]);
-    double values[3], vectors[3][3];
-    symmetric_eigen3(m, values, vectors);
-    double largest = std::max({values[0], values[1], values[2]});
-    double x[3] = {c[0], c[1], c[2]};
-    if (largest > 0) {
-      for (int k = 0; k < 3; ++k) {
-        if (!(values[k] > kQemRelativeEigenvalueCutoff * largest)) continue;
-        double along = (vectors[0][k] * r[0] + vectors[1][k] * r[1] + vectors[2][k] * r[2]) / values[k];
-        for (int d = 0; d < 3; ++d) x[d] += along * vectors[d][k];
-      }
-    }
-    // Clamp: the largest t in [0, 1] keeping c + t (x - c) inside the grown box. c itself is inside
-    // (a convex combination of points of the cluster; the box is widened to it against rounding).
-    double diagonal = std::sqrt((bb[3] - bb[0]) * (bb[3] - bb[0]) + (bb[4] - bb[1]) * (bb[4] - bb[1]) +
-                                (bb[5] - bb[2]) * (bb[5] - bb[2]));
-    double margin = kQemBoxMargin * diagonal;
-    double t = 1.0;
-    for (int d = 0; d < 3; ++d) {
-      double lo = std::min(bb[d], c[d]) - margin, hi = std::max(bb[3 + d], c[d]) + margin;
-      double step = x[d] - c[d];
-      if (!std::isfinite(step)) {
-        t = 0;
-        continue;
-      }
-      if (c[d] + step > hi) t = std::min(t, (hi - c[d]) / step);
-      if (c[d] + step < lo) t = std::min(t, (lo - c[d]) / step);
-    }
-    t = std::max(t, 0.0);
-    for (int d = 0; d < 3; ++d) positions[3 * size_t(i) + d] = float(c[d] + t * (x[d] - c[d]) + origin[d]);
+    solve_quadric(&quadric[9 * size_t(i)], bb, c, &own[3 * size_t(i)]);
+    for (int k = 0; k < 9; ++k) with_lent[k] = quadric[9 * size_t(i) + k] + lent[9 * size_t(i) + k];
+    solve_quadric(with_lent, bb, c, &points[3 * size_t(i)]);
+    reach[i] = kDistinctPoints * std::sqrt((bb[3] - bb[0]) * (bb[3] - bb[0]) + (bb[4] - bb[1]) * (bb[4] - bb[1]) +
+                                           (bb[5] - bb[2]) * (bb[5] - bb[2]));
+    order.push_back(i);
   }
+  if (topology && kBorderPlaneShare > 0) {
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      return points[3 * size_t(a)] != points[3 * size_t(b)] ? points[3 * size_t(a)] < points[3 * size_t(b)] : a < b;
+    });
+    const double widest = order.empty() ? 0 : *std::max_element(reach.begin(), reach.end());
+    std::vector<uint8_t> keeps_own(clusters, 0);
+    for (size_t k = 0; k < order.size(); ++k) {
+      const uint32_t i = order[k];
+      const double* p = &points[3 * size_t(i)];
+      for (size_t m = k + 1; m < order.size() && points[3 * size_t(order[m])] - p[0] <= widest; ++m) {
+        const uint32_t j = order[m];
+        const double* q = &points[3 * size_t(j)];
+        const double gap2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
+        const double close = std::min(reach[i], reach[j]);
+        if (gap2 <= close * close) keeps_own[std::max(i, j)] = 1;
+      }
+    }
+    for (uint32_t i = 0; i < clusters; ++i)
+      if (keeps_own[i] || (own_planes_only && (*own_planes_only)[i]))
+        for (int d = 0; d < 3; ++d) points[3 * size_t(i) + d] = own[3 * size_t(i) + d];
+  }
+  std::vector<float> positions(3 * size_t(clusters), 0.0f);
+  for (uint32_t i : order)
+    for (int d = 0; d < 3; ++d) positions[3 * size_t(i) + d] = float(points[3 * size_t(i) + d] + origin[d]);
   return positions;
 }
 
@@ -375,11 +474,12 @@ std::vector<float> place_qem(const Mesh& mesh, const std::vector<uint32_t>& labe
 
 namespace detail {
 
-std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
+std::vector<float> place_cluster_vertices(const Mesh& mesh, const Topology* topology,
+                                          const std::vector<uint32_t>& labels, uint32_t clusters,
                                           VertexPlacement placement, const std::vector<float>* face_weights,
                                           const std::vector<uint32_t>& vertex_cluster,
                                           const std::vector<double>& centroids, unsigned threads,
-                                          std::vector<uint32_t>* faces) {
+                                          std::vector<uint32_t>* faces, const std::vector<uint8_t>* own_planes_only) {
   if (faces) faces->clear();  // unknown unless the placement knows it
   switch (placement) {
     case VertexPlacement::closest:
@@ -387,7 +487,7 @@ std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<ui
     case VertexPlacement::projected:
       return place_projected(mesh, clusters, centroids, labels, threads, faces);
     case VertexPlacement::qem:
-      return place_qem(mesh, labels, clusters, centroids, face_weights);
+      return place_qem(mesh, topology, labels, clusters, centroids, face_weights, own_planes_only);
   }
   throw OptionError("coarsen: unknown vertex placement");
 }
@@ -419,8 +519,12 @@ std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<ui
       }
     }
   }
-  return detail::place_cluster_vertices(mesh, labels, clusters, placement, face_weights, vertex_cluster,
-                                        detail::mass_centroids(mesh, labels, clusters, face_weights), 0, nullptr);
+  Topology topology;  // qem lends clusters the planes across their borders
+  if (placement == VertexPlacement::qem) topology = build_topology(mesh);
+  return detail::place_cluster_vertices(mesh, placement == VertexPlacement::qem ? &topology : nullptr, labels,
+                                        clusters, placement, face_weights, vertex_cluster,
+                                        detail::mass_centroids(mesh, labels, clusters, face_weights), 0, nullptr,
+                                        nullptr);
 }
 
 VertexPlacement parse_vertex_placement(const std::string& s) {

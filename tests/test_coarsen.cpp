@@ -694,6 +694,50 @@ TEST_CASE("coarsen: qem on a flat cluster lies in its plane, at a cube corner re
   CHECK(centroid[0] < 0.9f);  // the centroid itself is well inside
 }
 
+TEST_CASE("coarsen: qem points of two flat clusters meeting at a crease lie on the crease") {
+  // An 8 x 4 grid folded up by 90 degrees along x = 4: a floor (cluster 0, 4 x 4) and a wall
+  // (cluster 1, 4 x 2). Each cluster's own planes are one plane, which leaves its point at its
+  // centroid, 2 units from the crease; the planes lent across the border pull both onto the crease
+  // line (x = 4, z = 0), at different places along it (y = 2 and y = 1).
+  Labeled g = grid(8, 4, [](int i, int) { return uint32_t(i >= 4); }, [](int i, int j) { return i < 4 || j < 2; });
+  for (size_t v = 0; v < g.mesh.vertex_count(); ++v) {
+    float* p = &g.mesh.positions[3 * v];
+    if (p[0] > 4) p[2] = p[0] - 4, p[0] = 4;
+  }
+  std::vector<float> q = place_cluster_vertices(g.mesh, g.labels, 2, VertexPlacement::qem);
+  std::vector<float> c = cluster_mass_centroids(g.mesh, g.labels, 2);
+  for (int i = 0; i < 2; ++i) {
+    CAPTURE(i);
+    CHECK(std::hypot(q[3 * i] - 4.0, q[3 * i + 2] - 0.0) < 1e-4);  // on the crease
+    CHECK(q[3 * i + 1] == doctest::Approx(c[3 * i + 1]).epsilon(1e-5));  // along it, at the centroid
+    CHECK(std::hypot(c[3 * i] - 4.0, c[3 * i + 2] - 0.0) > 1.5);
+  }
+}
+
+TEST_CASE("coarsen: qem points pulled onto one line keep their own planes where they would make a flat triangle") {
+  // An 8 x 6 grid folded up along x = 4. Floor: cluster 0 (y < 3), 1 (y > 3); wall: 2 (y < 2),
+  // 3 (2 < y < 4), 4 (y > 4). The lent planes pull every point onto the crease line, so the
+  // triangle of clusters 0, 1, 3 (they meet at (4, 3, 0)) would have no area.
+  Labeled g = grid(8, 6, [](int i, int j) {
+    if (i < 4) return j < 3 ? 0u : 1u;
+    return j < 2 ? 2u : j < 4 ? 3u : 4u;
+  });
+  for (size_t v = 0; v < g.mesh.vertex_count(); ++v) {
+    float* p = &g.mesh.positions[3 * v];
+    if (p[0] > 4) p[2] = p[0] - 4, p[0] = 4;
+  }
+  std::vector<float> lent = place_cluster_vertices(g.mesh, g.labels, 5, VertexPlacement::qem);
+  for (uint32_t c : {0u, 1u, 3u}) CHECK(std::hypot(lent[3 * c] - 4.0, lent[3 * c + 2]) < 1e-4);
+  CoarsenOptions options;
+  options.placement = VertexPlacement::qem;
+  CoarsenResult r = coarsen_clustering(g.mesh, build_topology(g.mesh), g.labels, 5, options);
+  CHECK(r.defects.empty());
+  CHECK(inspect(r.mesh).degenerate == 0);
+  bool kept_own = false;  // some cluster of the flat triangle left the crease
+  for (uint32_t c : {0u, 1u, 3u}) kept_own |= std::hypot(r.mesh.positions[3 * c] - 4.0, r.mesh.positions[3 * c + 2]) > 0.5;
+  CHECK(kept_own);
+}
+
 TEST_CASE("coarsen: projected placement lies on the surface, closest to the centroid") {
   Labeled s = sphere_four_clusters(3);
   std::vector<float> p = place_cluster_vertices(s.mesh, s.labels, 4, VertexPlacement::projected);

@@ -38,10 +38,11 @@ enum class VertexPlacement {
   /// part of it passes nearer. Exact point-triangle distances, one per face, O(F).
   projected,
   /// The point minimizing the sum of w_k * squared distance to the planes of the cluster's faces
-  /// (Garland-Heckbert quadrics). Directions the quadric does not constrain (eigenvalues below
-  /// 1e-3 of the largest) are left at c_i, so a flat cluster gives c_i and a corner gives the
-  /// corner. Clamped toward c_i so it stays inside the cluster's bounding box grown by 10% of its
-  /// diagonal.
+  /// (Garland-Heckbert quadrics), plus a tenth of the planes of the other clusters' faces around
+  /// its border vertices (a crease along the border then pulls the point onto it). Directions the
+  /// quadric does not constrain (eigenvalues below 1e-3 of the largest) are left at c_i, so a flat
+  /// cluster gives c_i and a corner gives the corner. Clamped toward c_i so it stays inside the
+  /// cluster's bounding box grown by 10% of its diagonal.
   qem,
 };
 
