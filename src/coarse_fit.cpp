@@ -1,37 +1,71 @@
-// meshcvt: moves the vertices of a coarse mesh so that the input surface lies on both sides of it,
-// the distance-fitting step of mesh optimization (Hoppe, DeRose, Duchamp, McDonald, Stuetzle,
-// SIGGRAPH 1993, E_dist with the connectivity fixed), one Jacobi step per pass. Used after the
-// `qem` placement (declared in coarsen.cpp's detail block).
+// meshcvt: fits a coarse mesh to the input surface it stands for, the distance minimization of
+// mesh optimization (Hoppe, DeRose, Duchamp, McDonald, Stuetzle, SIGGRAPH 1993: E_dist over the
+// vertex positions and over edge swaps, the vertex count fixed). Used after the `qem` placement
+// (declared in coarsen.cpp's detail block).
 //
-// Why: a quadric point minimizes the squared distances to the planes of its cluster's faces, so it
-// sits on the surface where the cluster is flat and just outside it where the cluster is curved.
-// The coarse triangles between three such points are chords, below the surface in their middle:
-// on a 131k-face sphere -> 200, every input point lies outside the coarse mesh. The distance the
-// coarse mesh should minimize is to the input's points, not to the cluster's planes.
+// Why move the vertices: a quadric point minimizes the squared distances to the planes of its
+// cluster's faces, so it sits on the surface where the cluster is flat and just outside it where
+// the cluster is curved. The coarse triangles between three such points are chords, below the
+// surface in their middle: on a 131k-face sphere -> 200, every input point lies outside the coarse
+// mesh. The distance the coarse mesh should minimize is to the input's points, not to the planes.
 //
-// One pass: each input face's centroid x (weight: its area) finds its closest point y on the
-// triangles around its own cluster's vertex, with barycentric coordinates b. Its residual x - y is
-// handed to the triangle's three vertices in proportion b, and each vertex moves by the weighted
-// mean of what it received: a uniform offset of a triangle's samples moves its three vertices by
-// exactly that offset. Only vertices whose every edge has two triangles move (boundaries keep
-// their shape); connectivity and the vertex count are never touched. The sums are in 64-bit fixed
-// point, so the result is the same for any thread count.
+// Why swap edges: the dual of a clustering joins clusters that touch, whatever lies between their
+// points. Where a crease runs between two rows of points, or the surface bends more one way than
+// the other, the other diagonal of two triangles follows the surface more closely (data-dependent
+// triangulation; on fandisk -> 1000, whose creases the clusters do not follow, most of the error
+// sits along the creases).
+//
+// The samples: three points per sampled input face (the degree-2 quadrature rule), each weighing a
+// third of its face's area, about kSamplesPerVertex per coarse vertex. Each is owned by one coarse
+// triangle: first the closest of the triangles around its own cluster's vertex, later the closest
+// of its owner and the owner's three neighbours (the owner moves little between passes).
+// One pass:
+//   * Jacobi step: each sample's residual x - y (y its closest point on its owner, with barycentric
+//     coordinates b) is handed to the owner's three vertices in proportion b; each vertex moves by
+//     the weighted mean of what it received (a uniform offset of a triangle's samples moves its
+//     three vertices by exactly that offset). Only vertices whose every edge has two consistently
+//     oriented triangles move, so boundaries keep their shape. The sums are 64-bit fixed point, so
+//     the result is the same for any thread count.
+//   * Owners again (parallel over samples, each writes its own).
+//   * Edge swaps, in edge order until none applies: an edge between (u, v, c) and (v, u, d) becomes
+//     (c, d) when the samples owned by the two triangles lie closer to the two new ones by at
+//     least kSwapGain of their squared distance (small gains are not worth the thinner triangles:
+//     they cost the bunnies far more angles below 30 degrees than they save distance, and raised
+//     Hausdorff distances), the result stays a manifold with the same orientation (c, d not joined
+//     already; u and v keep three edges; both new triangles face the side of the old ones), and
+//     the smaller smallest angle of the pair does not drop below min(its old value, kSwapAngleFloor).
+//     Swaps are tested one after the other in a fixed order, so the result is deterministic; after
+//     the first round only edges with a vertex touched since are tested again.
+// Connectivity changes only through swaps: the vertex count, the boundary and the orientation stay.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <vector>
 
-#include "meshcvt/coarsen.h"
+#include "coarse_fit.h"
 #include "coarse_rings.h"
 #include "parallel.h"
 #include "triangle_bvh.h"
+#include "vec3.h"
 
 namespace meshcvt {
 
 namespace {
 
-// Input faces sampled per coarse vertex (every stride-th face; all of them on smaller inputs).
-constexpr size_t kSamplesPerVertex = 32;
+// Samples per coarse vertex (three points per sampled face; every face on smaller inputs).
+// Measured with the swaps (fourteenth session): 32 instead of 64 raise qem's RMS distance by 4% on
+// bunny00 -> 500 and 1% on the 1.2M bunny -> 10k; 16, by 8% and 5%.
+constexpr size_t kSamplesPerVertex = 64;
+// A swap must lower its samples' squared distance by this fraction (see the top comment).
+constexpr double kSwapGain = 0.3;
+// ... and may not make its pair's smallest angle smaller than min(old, this).
+constexpr double kSwapAngleFloorDeg = 10;
+// Swap rounds stop after this many passes over the edges even if swaps remain (each swap lowers
+// the sampled distance, so they would end anyway).
+constexpr int kMaxSwapPasses = 8;
+// Samples (a few closest-point tests each) below which one thread does a parallel step.
+constexpr size_t kMinParallelSamples = 1024;
 
 // Barycentric coordinates of p, a point of triangle (a, b, c), from the areas opposite each corner
 // (Ericson, Real-Time Collision Detection 3.4). A degenerate triangle gives its first corner.
@@ -65,34 +99,92 @@ void corners(const Mesh& coarse, uint32_t triangle, double t[3][3]) {
     for (int d = 0; d < 3; ++d) t[j][d] = coarse.positions[3 * size_t(coarse.indices[3 * size_t(triangle) + j]) + d];
 }
 
+double distance2_to(const Mesh& coarse, uint32_t triangle, const double x[3]) {
+  double t[3][3], point[3];
+  corners(coarse, triangle, t);
+  return closest_point_on_triangle(x, t[0], t[1], t[2], point);
+}
+
+// Smallest angle of triangle (a, b, c) in radians, 0 when degenerate.
+double smallest_angle(Vec3 a, Vec3 b, Vec3 c) {
+  auto at = [](Vec3 p, Vec3 q, Vec3 r) { return std::atan2(length(cross(q - p, r - p)), dot(q - p, r - p)); };
+  return std::min({at(a, b, c), at(b, c, a), at(c, a, b)});
+}
+
+// Half-edges of the coarse mesh: h = 3t + k runs from indices[h] to indices[next(h)]; twin[h] is
+// the half-edge running back along the same edge in the other triangle, kNone unless the edge has
+// exactly two consistently oriented triangles (only such edges are swapped, and only vertices all
+// of whose edges are such move).
+struct HalfEdges {
+  std::vector<uint32_t> twin, valence, leaving;  // leaving[v]: a half-edge starting at v
+  std::vector<uint8_t> on_border;                // v has an edge without a twin
+
+  static uint32_t next(uint32_t h) { return h - h % 3 + (h % 3 + 1) % 3; }
+  static uint32_t prev(uint32_t h) { return h - h % 3 + (h % 3 + 2) % 3; }
+
+  HalfEdges(const std::vector<uint32_t>& tri, size_t vertices)
+      : twin(tri.size(), kNone), valence(vertices, 0), leaving(vertices, kNone), on_border(vertices, 0) {
+    std::vector<std::pair<uint64_t, uint32_t>> keyed(tri.size());  // (undirected edge, half-edge)
+    for (uint32_t h = 0; h < tri.size(); ++h) {
+      const uint32_t a = tri[h], b = tri[next(h)];
+      keyed[h] = {a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a), h};
+      leaving[a] = h;
+    }
+    std::sort(keyed.begin(), keyed.end());
+    for (size_t i = 0; i < keyed.size();) {
+      size_t j = i;
+      while (j < keyed.size() && keyed[j].first == keyed[i].first) ++j;
+      const uint32_t a = uint32_t(keyed[i].first >> 32), b = uint32_t(keyed[i].first);
+      ++valence[a], ++valence[b];
+      const uint32_t h = keyed[i].second, g = j - i == 2 ? keyed[i + 1].second : kNone;
+      if (a != b && g != kNone && tri[h] == tri[next(g)] && tri[g] == tri[next(h)]) {
+        twin[h] = g, twin[g] = h;
+      } else {
+        on_border[a] = on_border[b] = 1;
+      }
+      i = j;
+    }
+  }
+
+  // Whether an edge joins a and b: the half-edges leaving a, turning both ways from one of them
+  // (a fan may be open at a border).
+  bool joined(const std::vector<uint32_t>& tri, uint32_t a, uint32_t b) const {
+    const uint32_t start = leaving[a];
+    for (uint32_t h = start;;) {
+      if (tri[next(h)] == b) return true;
+      h = twin[prev(h)];
+      if (h == kNone) break;
+      if (h == start) return false;
+    }
+    for (uint32_t h = start;;) {
+      if (tri[prev(h)] == b) return true;
+      const uint32_t g = twin[h];
+      if (g == kNone) return false;
+      h = next(g);
+      if (h == start) return false;
+    }
+  }
+};
+
+struct Sample {
+  double x[3];
+  double weight;  // a third of its face's area
+  double d2;      // squared distance to its owner
+  uint32_t owner;
+};
+
 }  // namespace
 
 namespace detail {
 
-uint64_t fit_coarse_vertices(Mesh& coarse, const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t passes,
-                             unsigned threads) {
+FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t passes,
+                          bool swaps, unsigned threads) {
+  FitCounts counts;
   const size_t n = coarse.vertex_count(), faces = mesh.face_count(), triangles = coarse.face_count();
-  if (passes == 0 || n == 0 || triangles == 0 || labels.size() != faces) return 0;
-  std::vector<uint32_t> ring_offsets, ring;  // triangles per coarse vertex (CSR)
-  coarse_triangle_rings(coarse, ring_offsets, ring);
-  // Movable: every edge at the vertex is used by exactly two triangles.
-  std::vector<uint8_t> movable(n, 1);
-  {
-    std::vector<uint64_t> edges;
-    edges.reserve(3 * triangles);
-    for (size_t t = 0; t < triangles; ++t)
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t a = coarse.indices[3 * t + k], b = coarse.indices[3 * t + (k + 1) % 3];
-        edges.push_back(a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a));
-      }
-    std::sort(edges.begin(), edges.end());
-    for (size_t i = 0; i < edges.size();) {
-      size_t j = i;
-      while (j < edges.size() && edges[j] == edges[i]) ++j;
-      if (j - i != 2) movable[uint32_t(edges[i] >> 32)] = movable[uint32_t(edges[i])] = 0;
-      i = j;
-    }
-  }
+  if (passes == 0 || n == 0 || triangles == 0 || labels.size() != faces) return counts;
+  std::vector<uint32_t>& tri = coarse.indices;
+  HalfEdges edges(tri, n);
+
   // Scales of the fixed-point sums: a vertex's weight is at most the total area, its residual sum
   // at most the total area times the bounding-box diagonal; integer sums do not depend on the order
   // of addition, so the workers' partial sums give the same result for any thread count.
@@ -105,60 +197,77 @@ uint64_t fit_coarse_vertices(Mesh& coarse, const Mesh& mesh, const std::vector<u
     }
   const double diagonal = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                                     (hi[2] - lo[2]) * (hi[2] - lo[2]));
-  if (!(total_area > 0) || !(diagonal > 0)) return 0;
+  if (!(total_area > 0) || !(diagonal > 0)) return counts;
   const double weight_scale = std::ldexp(1.0, 60) / total_area;
   const double residual_scale = std::ldexp(1.0, 60) / (total_area * diagonal);
-  // Every stride-th face is a sample: about kSamplesPerVertex per coarse vertex are plenty to
-  // place it (measured: 32 per vertex give the RMS of all the faces to within 1%).
-  const size_t stride = std::max<size_t>(1, faces / (kSamplesPerVertex * n));
-  const size_t samples = (faces + stride - 1) / stride;
 
+  // Samples of every stride-th face with a cluster that has triangles.
+  std::vector<uint32_t> ring_offsets, ring;  // triangles per coarse vertex (CSR), for the first owners
+  coarse_triangle_rings(coarse, ring_offsets, ring);
+  const size_t stride = std::max<size_t>(1, 3 * faces / (kSamplesPerVertex * n));
+  std::vector<Sample> samples;
+  samples.reserve(3 * ((faces + stride - 1) / stride));
+  for (size_t f = 0; f < faces; f += stride) {
+    const uint32_t c = labels[f];
+    if (c >= n || ring_offsets[c] == ring_offsets[c + 1]) continue;
+    const double area = face_area(mesh, f);
+    if (!(area > 0)) continue;
+    double p[3][3];
+    for (int j = 0; j < 3; ++j)
+      for (int d = 0; d < 3; ++d) p[j][d] = mesh.positions[3 * size_t(mesh.indices[3 * f + j]) + d];
+    for (int k = 0; k < 3; ++k) {
+      Sample s;
+      for (int d = 0; d < 3; ++d) s.x[d] = (4 * p[k][d] + p[(k + 1) % 3][d] + p[(k + 2) % 3][d]) / 6;
+      s.weight = area / 3;
+      s.d2 = INFINITY;
+      s.owner = c;  // the cluster, until the owners are found
+      samples.push_back(s);
+    }
+  }
   WorkerPool pool(threads);
+  // The closest of the triangles around the cluster's vertex (ties: the first in the ring).
+  pool.run(samples.size(), [&](size_t first, size_t last, unsigned) {
+    for (size_t i = first; i < last; ++i) {
+      Sample& s = samples[i];
+      const uint32_t c = s.owner;
+      for (uint32_t r = ring_offsets[c]; r < ring_offsets[c + 1]; ++r) {
+        const double d2 = distance2_to(coarse, ring[r], s.x);
+        if (d2 < s.d2) s.d2 = d2, s.owner = ring[r];
+      }
+    }
+  }, kMinParallelSamples);
+
+  // Samples per triangle, kept by the swaps (a swap shares the pair's samples between its two new
+  // triangles); rebuilt after each owner update.
+  std::vector<std::vector<uint32_t>> owned(triangles);
+  auto collect = [&] {
+    for (auto& list : owned) list.clear();
+    for (uint32_t i = 0; i < samples.size(); ++i) owned[samples[i].owner].push_back(i);
+  };
+
   std::vector<std::vector<int64_t>> partial(pool.size(), std::vector<int64_t>(4 * n));
-  uint64_t moves = 0;
-  for (uint32_t pass = 0; pass < passes; ++pass) {
-    pool.run(samples, [&](size_t first, size_t last, unsigned worker) {
+  auto jacobi_step = [&] {
+    pool.run(samples.size(), [&](size_t first, size_t last, unsigned worker) {
       int64_t* acc = partial[worker].data();
       std::fill(acc, acc + 4 * n, int64_t(0));
-      for (size_t sample = first; sample < last; ++sample) {
-        const size_t f = sample * stride;
-        const uint32_t c = labels[f];
-        if (c >= n) continue;
-        const double area = face_area(mesh, f);
-        if (!(area > 0)) continue;
-        double x[3] = {0, 0, 0};
-        for (int j = 0; j < 3; ++j)
-          for (int d = 0; d < 3; ++d) x[d] += double(mesh.positions[3 * size_t(mesh.indices[3 * f + j]) + d]) / 3;
-        // The closest of the triangles around the cluster's vertex (ties: the first in the ring).
-        double best = INFINITY, best_point[3] = {0, 0, 0};
-        uint32_t best_triangle = 0;
-        for (uint32_t i = ring_offsets[c]; i < ring_offsets[c + 1]; ++i) {
-          double t[3][3], point[3];
-          corners(coarse, ring[i], t);
-          const double d2 = closest_point_on_triangle(x, t[0], t[1], t[2], point);
-          if (d2 < best) {
-            best = d2;
-            best_triangle = ring[i];
-            for (int d = 0; d < 3; ++d) best_point[d] = point[d];
-          }
-        }
-        if (!(best < INFINITY)) continue;
-        double t[3][3], b[3];
-        corners(coarse, best_triangle, t);
-        barycentric(best_point, t[0], t[1], t[2], b);
-        const uint32_t* tri = &coarse.indices[3 * size_t(best_triangle)];
+      for (size_t i = first; i < last; ++i) {
+        const Sample& s = samples[i];
+        double t[3][3], point[3], b[3];
+        corners(coarse, s.owner, t);
+        closest_point_on_triangle(s.x, t[0], t[1], t[2], point);
+        barycentric(point, t[0], t[1], t[2], b);
         for (int j = 0; j < 3; ++j) {
-          int64_t* a = &acc[4 * size_t(tri[j])];
-          a[0] += std::llround(area * b[j] * weight_scale);
-          for (int d = 0; d < 3; ++d) a[1 + d] += std::llround(area * b[j] * (x[d] - best_point[d]) * residual_scale);
+          int64_t* a = &acc[4 * size_t(tri[3 * size_t(s.owner) + j])];
+          a[0] += std::llround(s.weight * b[j] * weight_scale);
+          for (int d = 0; d < 3; ++d) a[1 + d] += std::llround(s.weight * b[j] * (s.x[d] - point[d]) * residual_scale);
         }
       }
-    }, 256);
+    }, kMinParallelSamples);
     for (size_t v = 0; v < n; ++v) {
       int64_t sum[4] = {0, 0, 0, 0};
       for (const std::vector<int64_t>& acc : partial)
         for (int k = 0; k < 4; ++k) sum[k] += acc[4 * v + k];
-      if (!movable[v] || sum[0] <= 0) continue;
+      if (edges.on_border[v] || edges.leaving[v] == kNone || sum[0] <= 0) continue;
       const double weight = double(sum[0]) / weight_scale;
       bool moved = false;
       for (int d = 0; d < 3; ++d) {
@@ -166,10 +275,122 @@ uint64_t fit_coarse_vertices(Mesh& coarse, const Mesh& mesh, const std::vector<u
         moved |= p != coarse.positions[3 * v + d];
         coarse.positions[3 * v + d] = p;
       }
-      moves += moved;
+      counts.moves += moved;
     }
+  };
+  // The owner or a triangle across one of its edges, whichever is closest (ties: the owner, then
+  // the lower edge).
+  auto update_owners = [&] {
+    pool.run(samples.size(), [&](size_t first, size_t last, unsigned) {
+      for (size_t i = first; i < last; ++i) {
+        Sample& s = samples[i];
+        const uint32_t t = s.owner;
+        s.d2 = distance2_to(coarse, t, s.x);
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t g = edges.twin[3 * size_t(t) + k];
+          if (g == kNone) continue;
+          const double d2 = distance2_to(coarse, g / 3, s.x);
+          if (d2 < s.d2) s.d2 = d2, s.owner = g / 3;
+        }
+      }
+    }, kMinParallelSamples);
+  };
+
+  const double angle_floor = kSwapAngleFloorDeg * std::numbers::pi / 180;
+  std::vector<uint32_t> touched(n, 0);  // the swap pass (from 1) that last changed a vertex's fan
+  std::vector<uint32_t> pair;
+  std::vector<double> to_first, to_second;
+  uint32_t swap_pass = 0;
+  // Tests edge h (the lower half-edge of its pair) and swaps it if that pays; true if swapped.
+  auto try_swap = [&](uint32_t h) {
+    const uint32_t g = edges.twin[h];
+    const uint32_t t1 = h / 3, t2 = g / 3;
+    const uint32_t u = tri[h], v = tri[HalfEdges::next(h)], c = tri[HalfEdges::prev(h)], d = tri[HalfEdges::prev(g)];
+    if (c == d || owned[t1].size() + owned[t2].size() == 0) return false;
+    if (edges.valence[u] <= (edges.on_border[u] ? 2u : 3u) || edges.valence[v] <= (edges.on_border[v] ? 2u : 3u))
+      return false;
+    const Vec3 pu = mesh_vertex(coarse, u), pv = mesh_vertex(coarse, v), pc = mesh_vertex(coarse, c),
+               pd = mesh_vertex(coarse, d);
+    const Vec3 n1 = cross(pv - pu, pc - pu), n2 = cross(pu - pv, pd - pv);
+    const double l1 = length(n1), l2 = length(n2);
+    if (!(l1 > 0) || !(l2 > 0)) return false;
+    const Vec3 side = (1 / l1) * n1 + (1 / l2) * n2;
+    if (!(dot(cross(pu - pc, pd - pc), side) > 0) || !(dot(cross(pv - pd, pc - pd), side) > 0)) return false;
+    const double before = std::min(smallest_angle(pu, pv, pc), smallest_angle(pv, pu, pd));
+    const double after = std::min(smallest_angle(pc, pu, pd), smallest_angle(pd, pv, pc));
+    if (after < std::min(before, angle_floor)) return false;
+    // The pair's samples against the two triangles of the other diagonal; given up as soon as
+    // the new sum cannot reach the required gain.
+    pair.assign(owned[t1].begin(), owned[t1].end());
+    pair.insert(pair.end(), owned[t2].begin(), owned[t2].end());
+    double old_error = 0;
+    for (uint32_t i : pair) old_error += samples[i].weight * samples[i].d2;
+    const double limit = old_error * (1 - kSwapGain);
+    const double a1[3][3] = {{pc.x, pc.y, pc.z}, {pu.x, pu.y, pu.z}, {pd.x, pd.y, pd.z}};
+    const double a2[3][3] = {{pd.x, pd.y, pd.z}, {pv.x, pv.y, pv.z}, {pc.x, pc.y, pc.z}};
+    double new_error = 0;
+    to_first.resize(pair.size()), to_second.resize(pair.size());
+    for (size_t i = 0; i < pair.size() && new_error < limit; ++i) {
+      const Sample& s = samples[pair[i]];
+      double point[3];
+      to_first[i] = closest_point_on_triangle(s.x, a1[0], a1[1], a1[2], point);
+      to_second[i] = closest_point_on_triangle(s.x, a2[0], a2[1], a2[2], point);
+      new_error += s.weight * std::min(to_first[i], to_second[i]);
+    }
+    if (!(new_error < limit) || edges.joined(tri, c, d)) return false;
+    // Swap: t1 = (c, u, d), t2 = (d, v, c); the four outer half-edges keep their twins.
+    std::vector<uint32_t>& twin = edges.twin;
+    const uint32_t outer_cu = twin[HalfEdges::prev(h)], outer_vc = twin[HalfEdges::next(h)],
+                   outer_ud = twin[HalfEdges::next(g)], outer_dv = twin[HalfEdges::prev(g)];
+    tri[3 * t1] = c, tri[3 * t1 + 1] = u, tri[3 * t1 + 2] = d;
+    tri[3 * t2] = d, tri[3 * t2 + 1] = v, tri[3 * t2 + 2] = c;
+    auto link = [&](uint32_t x, uint32_t y) {
+      twin[x] = y;
+      if (y != kNone) twin[y] = x;
+    };
+    link(3 * t1, outer_cu), link(3 * t1 + 1, outer_ud), link(3 * t1 + 2, 3 * t2 + 2);
+    link(3 * t2, outer_dv), link(3 * t2 + 1, outer_vc);
+    edges.leaving[c] = 3 * t1, edges.leaving[u] = 3 * t1 + 1, edges.leaving[d] = 3 * t2, edges.leaving[v] = 3 * t2 + 1;
+    --edges.valence[u], --edges.valence[v], ++edges.valence[c], ++edges.valence[d];
+    owned[t1].clear(), owned[t2].clear();
+    for (size_t i = 0; i < pair.size(); ++i) {
+      Sample& s = samples[pair[i]];
+      const bool first = to_first[i] <= to_second[i];
+      s.d2 = first ? to_first[i] : to_second[i];
+      s.owner = first ? t1 : t2;
+      owned[s.owner].push_back(pair[i]);
+    }
+    touched[u] = touched[v] = touched[c] = touched[d] = swap_pass;
+    return true;
+  };
+  // Passes over the edges; the first tests every edge, later ones only edges with a vertex whose
+  // fan changed in the pass before or this one.
+  auto swap_edges = [&] {
+    collect();
+    for (int pass = 0; pass < kMaxSwapPasses; ++pass) {
+      ++swap_pass;
+      uint64_t swapped = 0;
+      for (uint32_t h = 0; h < tri.size(); ++h) {
+        const uint32_t g = edges.twin[h];
+        if (g == kNone || g < h) continue;  // each edge once, from its lower half-edge
+        if (pass > 0) {
+          const uint32_t newest = std::max({touched[tri[h]], touched[tri[HalfEdges::next(h)]],
+                                            touched[tri[HalfEdges::prev(h)]], touched[tri[HalfEdges::prev(g)]]});
+          if (newest + 1 < swap_pass) continue;
+        }
+        swapped += try_swap(h);
+      }
+      counts.swaps += swapped;
+      if (swapped == 0) break;
+    }
+  };
+
+  for (uint32_t pass = 0; pass < passes; ++pass) {
+    jacobi_step();
+    update_owners();
+    if (swaps) swap_edges();
   }
-  return moves;
+  return counts;
 }
 
 }  // namespace detail

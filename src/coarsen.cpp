@@ -41,6 +41,7 @@
 
 #include "meshcvt/coarsen.h"
 #include "meshcvt/error.h"
+#include "coarse_fit.h"
 
 namespace meshcvt {
 
@@ -64,10 +65,6 @@ std::vector<float> place_cluster_vertices(const Mesh& mesh, const Topology* topo
 uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& topology,
                                const std::vector<uint32_t>& labels, uint32_t passes, double max_normal_turn_deg,
                                const std::vector<uint32_t>* start_faces, unsigned threads);
-// In coarse_fit.cpp: moves vertices so the input's face centroids lie on both sides of the coarse
-// mesh (a Jacobi step of distance fitting per pass); returns the number of vertex moves.
-uint64_t fit_coarse_vertices(Mesh& coarse, const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t passes,
-                             unsigned threads);
 }  // namespace detail
 
 namespace {
@@ -804,8 +801,12 @@ CoarsenResult coarsen_clustering(const Mesh& mesh, const Topology& topology, con
     if (options.flip_edges && result.relaxed_moves > 0)
       result.flipped_edges += flip_coarse_edges(result.mesh, options.flip_max_dihedral_deg);
   }
-  if (options.placement == VertexPlacement::qem && result.defects.empty())
-    result.fitted_moves = detail::fit_coarse_vertices(result.mesh, mesh, labels, options.fit_passes, options.threads);
+  if (options.placement == VertexPlacement::qem && result.defects.empty()) {
+    const detail::FitCounts fit =
+        detail::fit_coarse_mesh(result.mesh, mesh, labels, options.fit_passes, options.fit_swaps, options.threads);
+    result.fitted_moves = fit.moves;
+    result.swapped_edges = fit.swaps;
+  }
   return result;
 }
 

@@ -29,7 +29,7 @@ struct CoarsenArgs {
   uint32_t relax_passes = CoarsenOptions{}.relax_passes;
   uint32_t fit_passes = CoarsenOptions{}.fit_passes;
   unsigned threads = 0;
-  bool quiet = false, no_weld = false, no_error = false, no_flips = false;
+  bool quiet = false, no_weld = false, no_error = false, no_flips = false, no_fit_swaps = false;
   double gradation = 0;   ///< --gradation g: curvature-adaptive density (meshcvt/density.h); 0 = uniform
   std::string subdivide;  ///< --subdivide auto|K: "" = none
 };
@@ -99,6 +99,7 @@ void run_coarsen(const CoarsenArgs& a) {
   co.flip_edges = !a.no_flips;
   co.relax_passes = a.relax_passes;
   co.fit_passes = a.fit_passes;
+  co.fit_swaps = !a.no_fit_swaps;
 
   prepare_allocator(a.input);
   auto t0 = Clock::now();
@@ -180,7 +181,8 @@ void run_coarsen(const CoarsenArgs& a) {
           .value("rms", err.rms).value("rms_rel", err.rms_rel).end_object();
     j.value("flipped_edges", r.flipped_edges).value("relax_passes", a.relax_passes)
         .value("relax_max_normal_turn_deg", co.relax_max_normal_turn_deg).value("relaxed_moves", r.relaxed_moves)
-        .value("fit_passes", a.fit_passes).value("fitted_moves", r.fitted_moves);
+        .value("fit_passes", a.fit_passes).value("fitted_moves", r.fitted_moves)
+        .value("fit_swaps", co.fit_swaps).value("swapped_edges", r.swapped_edges);
     j.begin_array("defects");
     for (const DualDefect& d : r.defects)
       j.begin_object().value("kind", to_string(d.kind)).value("cluster", d.cluster).value("other", d.other).end_object();
@@ -259,7 +261,9 @@ const RegisterCommand reg(30, [](CLI::App& app) {
                       std::to_string(CoarsenOptions{}.relax_passes) + "; 0 = off)");
   sub->add_option("--fit-passes", a->fit_passes,
                   "with --vertex qem: passes moving each vertex so the input lies on both sides of the coarse mesh "
-                  "(lower RMS distance; default " + std::to_string(CoarsenOptions{}.fit_passes) + "; 0 = off)");
+                  "and swapping edges where the other diagonal lies closer to it (lower RMS distance; default " +
+                      std::to_string(CoarsenOptions{}.fit_passes) + "; 0 = off)");
+  sub->add_flag("--no-fit-swaps", a->no_fit_swaps, "with --vertex qem: the fitting passes move vertices only");
   sub->add_flag("--no-flips", a->no_flips, "keep the dual's triangles as built (no edge flips improving angles)");
   sub->add_flag("--no-weld", a->no_weld, "do not merge vertices with identical positions");
   sub->add_flag("--no-error", a->no_error, "skip measuring the distance to the input");

@@ -42,7 +42,7 @@ enum class VertexPlacement {
   /// its border vertices (a crease along the border then pulls the point onto it). Directions the
   /// quadric does not constrain (eigenvalues below 1e-3 of the largest) are left at c_i, so a flat
   /// cluster gives c_i and a corner gives the corner. Clamped toward c_i so it stays inside the
-  /// cluster's bounding box grown by 10% of its diagonal.
+  /// cluster's bounding box grown by 10% of its diagonal. Then CoarsenOptions::fit_passes.
   qem,
 };
 
@@ -69,15 +69,21 @@ struct CoarsenOptions {
   /// relax_coarse_vertices' limit (degrees) on how far a moved vertex may turn an incident
   /// triangle's normal.
   double relax_max_normal_turn_deg = 20;
-  /// `qem` placement only, last: passes fitting the vertices to the input (0 = off). Each moves
-  /// every vertex by the mean, weighted by area and barycentric share, of the offsets from the
-  /// coarse triangles around it to the centroids of its cluster's faces (at most ~32 sampled faces
-  /// per vertex), so the input lies on both sides of the coarse mesh. A quadric point alone sits at
-  /// the tangent planes of a curved cluster and leaves the triangles between such points below the
-  /// surface. Default 2, from bench/RESULTS.md (thirteenth session): RMS distance -19% to -49% on
-  /// the Table 1 meshes, Hausdorff -24% to +8%; about 60 ms per pass at 1.2M faces on 2 cores.
+  /// `qem` placement only, last: passes fitting the coarse mesh to the input (0 = off), the
+  /// distance minimization of Hoppe et al. 1993 with the vertex count fixed (coarse_fit.cpp).
+  /// About 64 sample points of the input per coarse vertex, each owned by its closest coarse
+  /// triangle. A pass moves every vertex by the mean, weighted by area and barycentric share, of
+  /// its samples' offsets from their closest points (a quadric point alone sits at the tangent
+  /// planes of a curved cluster and leaves the triangles between such points below the surface),
+  /// then, with `fit_swaps`, swaps the diagonal of two triangles where the other one lies closer to
+  /// their samples by at least 30% (creases the clusters do not follow; the direction the surface
+  /// bends least). Default 3, from bench/RESULTS.md (fourteenth session): with the swaps, RMS
+  /// distance 27-46% below the quadric points alone on the Table 1 meshes (without them 19-46%).
   /// Only when the dual has no defect.
-  uint32_t fit_passes = 2;
+  uint32_t fit_passes = 3;
+  /// The edge swaps of the fitting (above). They make triangles thinner where they follow a
+  /// crease or the surface's flatter direction: off, the fitting only moves vertices.
+  bool fit_swaps = true;
 };
 
 /// Something in a clustering that makes its dual mesh non-manifold or degenerate. `cluster`,
@@ -134,6 +140,7 @@ struct CoarsenResult {
   uint64_t flipped_edges = 0;          ///< edges flipped to improve triangles (CoarsenOptions::flip_edges)
   uint64_t relaxed_moves = 0;          ///< vertex moves kept by relax_coarse_vertices (one vertex may move in several passes)
   uint64_t fitted_moves = 0;           ///< vertex moves of the fitting passes (CoarsenOptions::fit_passes, qem only)
+  uint64_t swapped_edges = 0;          ///< edges swapped by the fitting (CoarsenOptions::fit_swaps, qem only)
 };
 
 /// Builds the dual mesh of a face clustering.
