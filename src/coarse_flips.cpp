@@ -23,6 +23,15 @@
 // threaded through the array (`head[v]`, `Edge::next`), so "is (c, d) an edge" scans only the few
 // edges of min(c, d). A flip retires its edge (unlinked; its key stays, for the pass order) and
 // appends (c, d).
+//
+// The angle test is defined on atan2 angles: min(after) > min(before) + 1e-9 radians. A cheap
+// stand-in almost always decides it the same way: the sine of a triangle's smallest angle, from
+// the law of sines without trigonometry (smallest_sine_squared). All smallest angles are at most
+// 60 degrees, where the sine grows, and |sin x - sin y| <= |x - y|: where the two sides' sines
+// differ by more than kSineMargin (1e-7), the angles differ by more than that, far beyond the 1e-9
+// plus the rounding of both computations (about 1e-15 each), so the atan2 comparison must come out
+// the same way. atan2 runs only on the near-ties left (exact_min_grows); debug builds assert that
+// every sine verdict agrees with it.
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -37,7 +46,8 @@ namespace meshcvt {
 
 namespace {
 
-// Smallest angle of triangle (a, b, c), radians; 0 when degenerate.
+// Smallest angle of triangle (a, b, c), radians; 0 when degenerate. The flip decision is defined on
+// these values: the faster tests below only reach the same answers.
 double min_angle(Vec3 a, Vec3 b, Vec3 c) {
   auto angle = [](Vec3 p, Vec3 q, Vec3 r) {  // at p
     Vec3 u = q - p, v = r - p;
@@ -46,6 +56,47 @@ double min_angle(Vec3 a, Vec3 b, Vec3 c) {
     return std::atan2(length(cross(u, v)), dot(u, v));
   };
   return std::min({angle(a, b, c), angle(b, c, a), angle(c, a, b)});
+}
+
+// sin^2 of the smallest angle of triangle (a, b, c) as the fraction area2 / edges2. Law of sines:
+// the sine at a corner is |n| / (product of the lengths of the two edges there), n = twice the area
+// vector; the smallest angle is the corner between the two longest edges (the largest product), and
+// the smallest angle (<= 60 degrees) has the smallest sine of the three. Rounding is a few 1e-16 in
+// the sine whatever the shape (the cross product's error is relative to the edges' product, which
+// it is divided by). An edge of length 0 makes n exactly 0, the sine 0, as min_angle's 0; all three
+// make edges2 0.
+struct SineSquared {
+  double area2, edges2;
+};
+SineSquared smallest_sine_squared(Vec3 a, Vec3 b, Vec3 c) {
+  const Vec3 ab = b - a, ac = c - a, bc = c - b;
+  const Vec3 n = cross(ab, ac);
+  const double l_ab = dot(ab, ab), l_ac = dot(ac, ac), l_bc = dot(bc, bc);
+  return {dot(n, n), std::max({l_ab * l_ac, l_ab * l_bc, l_ac * l_bc})};
+}
+
+// Sine of the smallest angle; NaN where it cannot stand in for the angle (all three corners at one
+// point, coordinates that are not finite), which leaves the decision to atan2.
+double smallest_sine(SineSquared s) {
+  if (!(s.edges2 > 0) || !std::isfinite(s.area2 + s.edges2)) return std::numeric_limits<double>::quiet_NaN();
+  return std::sqrt(s.area2 / s.edges2);
+}
+
+// Far above the rounding of both the sines and the atan2 angles (about 1e-15), and above the 1e-9
+// of the decision: a sine difference of kSineMargin is an angle difference of at least kSineMargin.
+constexpr double kSineMargin = 1e-7;
+
+enum class Verdict { fails, passes, unsure };
+
+// Whether a new triangle (its sin^2 `after`) keeps its smallest angle above the smaller old one (its
+// sine `before`) plus 1e-9 radians, as the atan2 angles would decide it; unsure within the margin.
+Verdict compare_sine(SineSquared after, double before) {
+  if (!(after.edges2 > 0) || !std::isfinite(after.area2 + after.edges2)) return Verdict::unsure;
+  const double low = before - kSineMargin, high = before + kSineMargin;
+  // Squared on both sides (all >= 0) so that no square root or division is needed per test.
+  if (low > 0 && after.area2 <= low * low * after.edges2) return Verdict::fails;
+  if (after.area2 >= high * high * after.edges2) return Verdict::passes;
+  return Verdict::unsure;
 }
 
 constexpr uint32_t kNoEdge = UINT32_MAX;  // ends a list of edges; "no such edge"
@@ -188,14 +239,25 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg, uint32_t max_pas
         return;
       }
   };
-  // Smallest angle of each triangle, cached: a triangle changes only when one of its edges flips.
-  // min_angle of any rotation of a triangle's corners makes the same three calls, so the cached
-  // value is exactly what the test below would compute. NaN: not known yet.
-  std::vector<double> triangle_min(nt, std::numeric_limits<double>::quiet_NaN());
+  // Per triangle, cached (a triangle changes only when one of its edges flips): the sine of its
+  // smallest angle, and its atan2 smallest angle, NaN until an unsure test needs it (allocated
+  // then). min_angle of any rotation of a triangle's corners makes the same three calls, so the
+  // cached value is exactly what the test would compute.
+  std::vector<double> sine_min(nt);
+  for (uint32_t t = 0; t < nt; ++t)
+    sine_min[t] = smallest_sine(smallest_sine_squared(vertex(tri[3 * t]), vertex(tri[3 * t + 1]), vertex(tri[3 * t + 2])));
+  std::vector<double> triangle_min;
   auto cached_min = [&](uint32_t t) {
+    if (triangle_min.empty()) triangle_min.assign(nt, std::numeric_limits<double>::quiet_NaN());
     if (std::isnan(triangle_min[t]))
       triangle_min[t] = min_angle(vertex(tri[3 * t]), vertex(tri[3 * t + 1]), vertex(tri[3 * t + 2]));
     return triangle_min[t];
+  };
+  // The decision itself: min(after) > min(before) + 1e-9 on the atan2 angles, i.e. every new
+  // triangle's smallest angle above the bound.
+  auto exact_min_grows = [&](uint32_t t1, uint32_t t2, uint32_t c, uint32_t u, uint32_t d, uint32_t v) {
+    const double bound = std::min(cached_min(t1), cached_min(t2)) + 1e-9;
+    return min_angle(vertex(c), vertex(u), vertex(d)) > bound && min_angle(vertex(d), vertex(v), vertex(c)) > bound;
   };
   // Exact skip of repeated tests: an edge's test reads its two triangles, the valences of its ends
   // u, v and whether (c, d) is an edge. A flip changes those only for its own four vertices, which
@@ -246,23 +308,39 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg, uint32_t max_pas
       if (c == UINT32_MAX || d == UINT32_MAX || c == d) continue;
       if (!may_lose_edge(u) || !may_lose_edge(v)) continue;
       if (set.find(c, d) != kNoEdge) continue;
+      // The sine test first: it refuses most candidates, at the cost of one cross product each.
+      const Vec3 pu = vertex(u), pv = vertex(v), pc = vertex(c), pd = vertex(d);
+      // std::min would drop a NaN in its second argument: either old sine unknown, all unsure.
+      const bool sines_known = !std::isnan(sine_min[t1]) && !std::isnan(sine_min[t2]);
+      const double sine_before = std::min(sine_min[t1], sine_min[t2]);
+      const SineSquared after1 = smallest_sine_squared(pc, pu, pd);
+      const Verdict verdict1 = sines_known ? compare_sine(after1, sine_before) : Verdict::unsure;
+      if (verdict1 == Verdict::fails) {
+        assert(!exact_min_grows(t1, t2, c, u, d, v));
+        continue;
+      }
+      const SineSquared after2 = smallest_sine_squared(pd, pv, pc);
+      const Verdict verdict2 = sines_known ? compare_sine(after2, sine_before) : Verdict::unsure;
+      if (verdict2 == Verdict::fails) {
+        assert(!exact_min_grows(t1, t2, c, u, d, v));
+        continue;
+      }
       Vec3 n1 = normal(u, v, c), n2 = normal(v, u, d);
       double l1 = length(n1), l2 = length(n2);
       if (l1 == 0 || l2 == 0 || dot(n1, n2) < min_cos * l1 * l2) continue;
       Vec3 m1 = normal(c, u, d), m2 = normal(d, v, c), side = {n1.x / l1 + n2.x / l2, n1.y / l1 + n2.y / l2,
                                                              n1.z / l1 + n2.z / l2};
       if (!(dot(m1, side) > 0) || !(dot(m2, side) > 0)) continue;
-      // The flip needs min(after) > min(before) + 1e-9, i.e. every new triangle's smallest angle
-      // above the bound: the second is not measured when the first already fails.
-      const double bound = std::min(cached_min(t1), cached_min(t2)) + 1e-9;
-      const double after1 = min_angle(vertex(c), vertex(u), vertex(d));
-      if (!(after1 > bound)) continue;
-      const double after2 = min_angle(vertex(d), vertex(v), vertex(c));
-      if (!(after2 > bound)) continue;
-      triangle_min[t1] = after1, triangle_min[t2] = after2;
-      // Flip: t1 = (c, u, d), t2 = (d, v, c).
+      if (verdict1 == Verdict::passes && verdict2 == Verdict::passes) {
+        assert(exact_min_grows(t1, t2, c, u, d, v));
+      } else if (!exact_min_grows(t1, t2, c, u, d, v)) {
+        continue;
+      }
+      // Flip: t1 = (c, u, d), t2 = (d, v, c); their cached atan2 angles are unknown again.
       tri[3 * t1] = c, tri[3 * t1 + 1] = u, tri[3 * t1 + 2] = d;
       tri[3 * t2] = d, tri[3 * t2 + 1] = v, tri[3 * t2 + 2] = c;
+      sine_min[t1] = smallest_sine(after1), sine_min[t2] = smallest_sine(after2);
+      if (!triangle_min.empty()) triangle_min[t1] = triangle_min[t2] = std::numeric_limits<double>::quiet_NaN();
       set.unlink(e);
       edges[e].face[0] = edges[e].face[1] = kNoFace;  // retired
       replace(set.find(u, d), t2, t1);  // was in t2 = (v, u, d), now in t1
