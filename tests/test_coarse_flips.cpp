@@ -25,6 +25,20 @@ Mesh rhombus(float height, float fold = 0) {
   return m;
 }
 
+// The angle rule as flip_coarse_edges defines it: smallest corner angle by atan2, radians.
+double reference_min_angle(const Mesh& m, uint32_t a, uint32_t b, uint32_t c) {
+  auto p = [&](uint32_t v) { return std::vector<double>{m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]}; };
+  auto angle = [](std::vector<double> o, std::vector<double> q, std::vector<double> r) {
+    double u[3], w[3];
+    for (int i = 0; i < 3; ++i) u[i] = q[i] - o[i], w[i] = r[i] - o[i];
+    const double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+    const double nu = std::sqrt((u[0] * u[0] + u[1] * u[1]) + u[2] * u[2]), nw = std::sqrt((w[0] * w[0] + w[1] * w[1]) + w[2] * w[2]);
+    if (nu == 0 || nw == 0) return 0.0;
+    return std::atan2(std::sqrt((cr[0] * cr[0] + cr[1] * cr[1]) + cr[2] * cr[2]), (u[0] * w[0] + u[1] * w[1]) + u[2] * w[2]);
+  };
+  return std::min({angle(p(a), p(b), p(c)), angle(p(b), p(c), p(a)), angle(p(c), p(a), p(b))});
+}
+
 }  // namespace
 
 TEST_CASE("coarse flips: two slivers across the long diagonal become two fat triangles") {
@@ -97,4 +111,24 @@ TEST_CASE("coarse flips: topology, vertices and orientation are kept on closed a
     std::sort(directed.begin(), directed.end());
     CHECK(std::adjacent_find(directed.begin(), directed.end()) == directed.end());
   }
+}
+
+TEST_CASE("coarse flips: near ties follow the atan2 rule, also where the fast sine test must defer") {
+  // A unit square split along 0-2, vertex 3 nudged sideways: the other diagonal is better or worse
+  // by about the nudge in radians. Nudges around 1e-9 (the rule's tolerance) and 1e-7 (the sine
+  // test's margin, inside which atan2 decides) must give exactly what the rule says.
+  int flipped = 0, kept = 0;
+  for (double nudge : {0.0, 3e-10, -3e-10, 2e-9, -2e-9, 1e-8, -1e-8, 6e-8, -6e-8, 1.5e-7, -1.5e-7, 1e-6, -1e-6}) {
+    Mesh m;
+    m.positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, float(nudge), 1, 0};
+    m.indices = {0, 1, 2, 0, 2, 3};
+    const double before = std::min(reference_min_angle(m, 0, 1, 2), reference_min_angle(m, 0, 2, 3));
+    const double after = std::min(reference_min_angle(m, 0, 1, 3), reference_min_angle(m, 1, 2, 3));
+    const uint64_t expected = after > before + 1e-9 ? 1 : 0;
+    CAPTURE(nudge);
+    CHECK(flip_coarse_edges(m) == expected);
+    (expected ? flipped : kept) += 1;
+  }
+  CHECK(flipped >= 4);  // both outcomes occur on both sides of 1e-9
+  CHECK(kept >= 4);
 }
