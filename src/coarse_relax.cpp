@@ -105,6 +105,27 @@ Shape triangle_shape(Vec3 a, Vec3 b, Vec3 c) {
 
 Vec3 point_of(const float* p) { return {p[0], p[1], p[2]}; }
 
+// Whether every edge at v has exactly two triangles, using it in opposite directions, and no
+// triangle at v repeats a vertex: then the corners after v in its triangles and the corners before
+// v are the same neighbours, each once. Only triangles at v have an edge at v, so v's own ring
+// decides (a bad edge makes both its ends stay; each end finds it in its own ring). [first, last):
+// the triangles at v; after, before: scratch.
+bool ring_is_closed_disk(const Mesh& coarse, const uint32_t* first, const uint32_t* last, uint32_t v,
+                         std::vector<uint32_t>& after, std::vector<uint32_t>& before) {
+  after.clear();
+  before.clear();
+  for (const uint32_t* t = first; t != last; ++t) {
+    const uint32_t* tri = &coarse.indices[3 * size_t(*t)];
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) return false;
+    const int k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+    after.push_back(tri[(k + 1) % 3]);
+    before.push_back(tri[(k + 2) % 3]);
+  }
+  std::sort(after.begin(), after.end());
+  std::sort(before.begin(), before.end());
+  return after == before && std::adjacent_find(after.begin(), after.end()) == after.end();
+}
+
 }  // namespace
 
 namespace {
@@ -161,33 +182,13 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       }
   // Movable: every edge at the vertex has exactly two triangles using it in opposite directions,
   // no triangle repeats the vertex, it has three or more triangles and its cluster has faces.
-  std::vector<uint8_t> movable(n, 1);
+  std::vector<uint8_t> movable(n, 0);
   {
-    std::vector<uint64_t> half_edges;  // undirected key << 1 | direction
-    half_edges.reserve(3 * triangles);
-    for (size_t t = 0; t < triangles; ++t) {
-      const uint32_t* tri = &coarse.indices[3 * t];
-      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2])
-        for (int k = 0; k < 3; ++k) movable[tri[k]] = 0;
-      for (int k = 0; k < 3; ++k) {
-        uint32_t a = tri[k], b = tri[(k + 1) % 3];
-        uint64_t key = a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a);
-        half_edges.push_back(key << 1 | uint64_t(a < b));
-      }
-    }
-    std::sort(half_edges.begin(), half_edges.end());
-    for (size_t i = 0; i < half_edges.size();) {
-      size_t j = i;
-      while (j < half_edges.size() && half_edges[j] >> 1 == half_edges[i] >> 1) ++j;
-      bool manifold = j - i == 2 && (half_edges[i] & 1) != (half_edges[i + 1] & 1);
-      if (!manifold) {
-        uint64_t key = half_edges[i] >> 1;
-        movable[uint32_t(key >> 32)] = movable[uint32_t(key)] = 0;
-      }
-      i = j;
-    }
-    for (size_t v = 0; v < n; ++v)
-      if (home[v] == kNone || ring_offsets[v + 1] - ring_offsets[v] < 3) movable[v] = 0;
+    std::vector<uint32_t> after, before;  // per ring triangle of v: the corner after v, before v
+    for (uint32_t v = 0; v < n; ++v)
+      if (home[v] != kNone && ring_offsets[v + 1] - ring_offsets[v] >= 3)
+        movable[v] = ring_is_closed_disk(coarse, ring.data() + ring_offsets[v], ring.data() + ring_offsets[v + 1], v,
+                                         after, before);
   }
 
   // A point of cluster c's faces near q: from the face `home` (in c), step to the edge-neighbour
@@ -250,21 +251,20 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
   // them one after the other class by class, whatever the thread count.
   std::vector<uint32_t> class_offsets, class_vertices;
   {
-    std::vector<uint32_t> color(n, kNone), used;
+    // used_by[c] == v: a neighbour of v already has color c (no sort of the neighbours' colors).
+    std::vector<uint32_t> color(n, kNone), used_by;
     uint32_t classes = 0;
     for (uint32_t v = 0; v < n; ++v) {
       if (!movable[v]) continue;
-      used.clear();
       for (uint32_t i = ring_offsets[v]; i < ring_offsets[v + 1]; ++i)
         for (int k = 0; k < 3; ++k) {
           const uint32_t w = coarse.indices[3 * size_t(ring[i]) + k];
-          if (w != v && color[w] != kNone) used.push_back(color[w]);
+          if (w == v || color[w] == kNone) continue;
+          if (color[w] >= used_by.size()) used_by.resize(color[w] + 1, kNone);
+          used_by[color[w]] = v;
         }
-      std::sort(used.begin(), used.end());
       uint32_t c = 0;
-      for (uint32_t u : used)
-        if (u == c) ++c;
-        else if (u > c) break;
+      while (c < used_by.size() && used_by[c] == v) ++c;
       color[v] = c;
       classes = std::max(classes, c + 1);
     }
