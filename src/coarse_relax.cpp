@@ -86,21 +86,50 @@ struct Shape {
   // tan of the smallest angle: the smallest angle of a triangle is at most 60 degrees, where tan
   // grows with the angle, so comparing it compares angles without an atan2.
   double min_tan;
-  double q;  // (6 / sqrt 3) area / (semi-perimeter * longest edge), 1 when equilateral
+  // What Q (quality()) takes besides: twice the area and the squared edge lengths. Most tried
+  // points are decided by the smallest angle alone, and Q's three square roots and division were
+  // half the cost of a shape.
+  double twice_area, ab2, bc2, ca2;
 };
 
-Shape triangle_shape(Vec3 a, Vec3 b, Vec3 c) {
+// sqrt(x) <= sqrt(y) for squared lengths, as the rounded roots compare, mostly without taking
+// them: a correctly rounded sqrt never reverses an order, and squares more than 1e-12 apart
+// (relative) have roots farther apart than their rounding. Near-ties, and values too small or
+// not finite for that margin, take the roots.
+bool root_le(double x, double y) {
+  if (x <= y) return true;
+  if (y > 1e-280 && x > y * (1 + 1e-12)) return false;
+  return std::sqrt(x) <= std::sqrt(y);
+}
+
+// (inline: called out of line, its corners and result went through memory, 6% of the
+// instructions of relax.)
+inline Shape triangle_shape(Vec3 a, Vec3 b, Vec3 c) {
   const Vec3 ab = b - a, bc = c - b, ca = a - c;
-  const double lab = length(ab), lbc = length(bc), lca = length(ca);
+  const double ab2 = dot(ab, ab), bc2 = dot(bc, bc), ca2 = dot(ca, ca);
   const double twice_area = length(cross(ab, bc));
-  // The smallest angle is opposite the shortest edge; its cosine times the two edges beside it:
-  const double adjacent = lab <= lbc && lab <= lca ? -dot(bc, ca)   // at c
-                          : lbc <= lca             ? -dot(ca, ab)   // at a
-                                                   : -dot(ab, bc);  // at b
+  // The smallest angle is opposite the shortest edge (edges compared as their lengths compare);
+  // its cosine times the two edges beside it:
+  const double adjacent = root_le(ab2, bc2) && root_le(ab2, ca2) ? -dot(bc, ca)   // at c
+                          : root_le(bc2, ca2)                    ? -dot(ca, ab)   // at a
+                                                                 : -dot(ab, bc);  // at b
   const double min_tan = twice_area > 0 ? (adjacent > 0 ? twice_area / adjacent : INFINITY) : 0.0;
+  return {min_tan, twice_area, ab2, bc2, ca2};
+}
+
+// Q = (6 / sqrt 3) area / (semi-perimeter * longest edge), 1 when equilateral.
+double quality(const Shape& s) {
+  const double lab = std::sqrt(s.ab2), lbc = std::sqrt(s.bc2), lca = std::sqrt(s.ca2);
   const double longest = std::max({lab, lbc, lca});
   const double denominator = 0.5 * (lab + lbc + lca) * longest;
-  return {min_tan, denominator > 0 ? (3.0 / std::sqrt(3.0)) * twice_area / denominator : 0.0};
+  return denominator > 0 ? (3.0 / std::sqrt(3.0)) * s.twice_area / denominator : 0.0;
+}
+
+// The sum of Q over the first `count` shapes, in order (every sum of a ring adds in one order).
+double quality_sum(const std::vector<Shape>& shapes, uint32_t count) {
+  double sum = 0;
+  for (uint32_t i = 0; i < count; ++i) sum += quality(shapes[i]);
+  return sum;
 }
 
 Vec3 point_of(const float* p) { return {p[0], p[1], p[2]}; }
@@ -204,12 +233,14 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       return closest_point_on_triangle(q, corner[0], corner[1], corner[2], point);
     };
     double best = distance(at, out);
+    // The face the walk came from is strictly farther than `at`: never taken again, not measured.
+    uint32_t from = kNone;
     for (uint32_t steps = 0; steps < kMaxWalkSteps; ++steps) {
       uint32_t next = kNone;
       double next_point[3] = {0, 0, 0}, next_best = best;
       for (int e = 0; e < 3; ++e) {
         const uint32_t g = topology.face_adjacent[3 * size_t(at) + e];
-        if (g == kNone || labels[g] != c) continue;
+        if (g == kNone || g == from || labels[g] != c) continue;
         double point[3];
         const double d2 = distance(g, point);
         if (d2 < next_best) {  // ties: the lower edge index
@@ -220,6 +251,7 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       }
       if (next == kNone) break;
       best = next_best;
+      from = at;
       at = next;
       for (int d = 0; d < 3; ++d) out[d] = next_point[d];
     }
@@ -285,7 +317,12 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
   std::vector<uint8_t> seen(faces, 0);
   struct Scratch {
     std::vector<uint32_t> flood, visited;
-    std::vector<Vec3> cluster_points, old_normals;
+    std::vector<Vec3> cluster_points;
+    // Per triangle at the vertex being moved: its other two corners (2 per triangle, in its
+    // orientation after the vertex), its unit normal and shape before the move, its shape at the
+    // tried point.
+    std::vector<Vec3> corners, old_normals;
+    std::vector<Shape> old_shapes, new_shapes;
   };
   auto gather = [&](uint32_t c, uint32_t start, Scratch& w) {
     w.cluster_points.clear();
@@ -335,39 +372,38 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
   std::vector<Scratch> scratch(pool.size());
   // One vertex's move (or none): reads the ring, writes v's position, home and outcome only.
   auto relax_vertex = [&](uint32_t v, Scratch& w) {
-    std::vector<Vec3>& old_normals = w.old_normals;
-    const uint32_t begin = ring_offsets[v], end = ring_offsets[v + 1];
+    const uint32_t* triangles_at = ring.data() + ring_offsets[v];
+    const uint32_t count = ring_offsets[v + 1] - ring_offsets[v];
     const Vec3 p = point_of(&coarse.positions[3 * size_t(v)]);
-    // The other two corners of an incident triangle, in its orientation after v.
-    auto others = [&](uint32_t t, Vec3& b, Vec3& c) {
-      const uint32_t* tri = &coarse.indices[3 * size_t(t)];
+    // The ring, read once: every tried point reads it again.
+    w.corners.resize(2 * size_t(count));
+    w.old_normals.resize(count);
+    w.old_shapes.resize(count);
+    w.new_shapes.resize(count);
+    for (uint32_t i = 0; i < count; ++i) {
+      const uint32_t* tri = &coarse.indices[3 * size_t(triangles_at[i])];
       const int k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
-      b = point_of(&coarse.positions[3 * size_t(tri[(k + 1) % 3])]);
-      c = point_of(&coarse.positions[3 * size_t(tri[(k + 2) % 3])]);
-    };
-    double old_min = INFINITY, old_q = 0, edge_sum = 0;  // old_min, new_min: tan of the smallest angle
+      w.corners[2 * i] = point_of(&coarse.positions[3 * size_t(tri[(k + 1) % 3])]);
+      w.corners[2 * i + 1] = point_of(&coarse.positions[3 * size_t(tri[(k + 2) % 3])]);
+    }
+    double old_min = INFINITY;  // old_min, new_min: tan of the smallest angle
     Vec3 target = {0, 0, 0};
     double tensor[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // sum of area * n n^T over the ring
-    old_normals.clear();
-    for (uint32_t i = begin; i < end; ++i) {
-      Vec3 b, c;
-      others(ring[i], b, c);
-      const Shape s = triangle_shape(p, b, c);
-      old_min = std::min(old_min, s.min_tan);
-      old_q += s.q;
-      edge_sum += length(b - p);
+    for (uint32_t i = 0; i < count; ++i) {
+      const Vec3 b = w.corners[2 * i], c = w.corners[2 * i + 1];
+      w.old_shapes[i] = triangle_shape(p, b, c);
+      old_min = std::min(old_min, w.old_shapes[i].min_tan);
       // In a closed fan every neighbour is a corner of two triangles: this sums each twice.
       target = target + 0.5 * (b + c);
       const Vec3 m = cross(b - p, c - p);
       const double l = length(m);
       const Vec3 u = l > 0 ? (1.0 / l) * m : Vec3{0, 0, 0};
-      old_normals.push_back(u);
+      w.old_normals[i] = u;
       const double e[3] = {u.x, u.y, u.z};
       for (int r = 0; r < 3; ++r)
         for (int k = 0; k < 3; ++k) tensor[r][k] += 0.5 * l * e[r] * e[k];
     }
-    const double count = double(end - begin);
-    target = (1.0 / count) * target;
+    target = (1.0 / double(count)) * target;
     const Vec3 full = target - p;
     // The directions the ring's normals leave free: both tangent directions on a flat ring, the
     // crease's direction on a crease, none at a corner. Steps along them keep the ring's shape;
@@ -388,6 +424,8 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
     // A vertex of a triangle below kRescueTan (33 degrees) may also step across a feature, tangent to the
     // ring's mean plane, if that lifts its smallest angle: rare, and what it takes on creases.
     const bool rescue = old_min < kRescueTan;
+    double old_q = 0;  // the ring's sum of Q before the move, once a tried point needs it
+    bool have_old_q = false;
     for (int attempt = 0; attempt < (rescue ? 2 : 1); ++attempt) {
       const Vec3 step = attempt == 0 ? free_step : tangent_step;
       if (!(dot(step, step) > 0)) continue;
@@ -396,6 +434,9 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
         gather(v, home[v], w);
         old_error = ring_error(v, p, w.cluster_points);
       }
+      // A better point keeps the smallest angle at or above `floor` and lifts it or (along the
+      // free directions only) the sum of Q; across a feature the floor is the old angle itself.
+      const double floor = attempt == 0 ? std::min(old_min, kSafeTan) : old_min;
       bool moved = false;
       for (double fraction : kStepFractions) {
         const double q[3] = {p.x + fraction * step.x, p.y + fraction * step.y, p.z + fraction * step.z};
@@ -406,28 +447,35 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
         const float stored[3] = {float(onto[0]), float(onto[1]), float(onto[2])};
         const Vec3 np = point_of(stored);
         if (np.x == p.x && np.y == p.y && np.z == p.z) break;  // no move left
-        double new_min = INFINITY, new_q = 0;
-        bool folds = false;
-        for (uint32_t i = begin; i < end && !folds; ++i) {
-          Vec3 b, c;
-          others(ring[i], b, c);
+        // Refused at the first triangle that folds, or once the smallest angle is below what a
+        // better point needs: new_min only falls as triangles are added (std::min keeps the
+        // number when a min_tan is NaN, so the whole ring's new_min would fail the same test).
+        double new_min = INFINITY;
+        bool refused = false;
+        for (uint32_t i = 0; i < count && !refused; ++i) {
+          const Vec3 b = w.corners[2 * i], c = w.corners[2 * i + 1];
           const Vec3 m = cross(b - np, c - np);
           const double l = length(m);
-          folds = !(l > 0) || !(dot(m, old_normals[i - begin]) >= min_cos * l);
-          const Shape s = triangle_shape(np, b, c);
-          new_min = std::min(new_min, s.min_tan);
-          new_q += s.q;
+          if (!(l > 0) || !(dot(m, w.old_normals[i]) >= min_cos * l)) {
+            refused = true;
+            break;
+          }
+          w.new_shapes[i] = triangle_shape(np, b, c);
+          new_min = std::min(new_min, w.new_shapes[i].min_tan);
+          refused = attempt == 0 ? new_min < floor : !(new_min > floor);
         }
-        if (folds) continue;
-        const bool better = attempt == 0
-                                ? new_min >= std::min(old_min, kSafeTan) && (new_min > old_min || new_q > old_q)
-                                : new_min > old_min;
-        if (!better) continue;
+        if (refused) continue;
+        if (attempt == 0 && !(new_min > old_min)) {
+          if (!have_old_q) old_q = quality_sum(w.old_shapes, count), have_old_q = true;
+          if (!(quality_sum(w.new_shapes, count) > old_q)) continue;
+        }
         // Across a feature the move must not take the ring farther from its cluster's points.
         if (attempt == 1 && ring_error(v, np, w.cluster_points) > kRescueErrorGrowth * old_error) continue;
         for (int d = 0; d < 3; ++d) coarse.positions[3 * size_t(v) + d] = stored[d];
         home[v] = face;
-        outcome[v] = length(np - p) >= kWakeFraction * edge_sum / count ? 2 : 1;
+        double edge_sum = 0;  // for the mean ring edge
+        for (uint32_t i = 0; i < count; ++i) edge_sum += length(w.corners[2 * i] - p);
+        outcome[v] = length(np - p) >= kWakeFraction * edge_sum / double(count) ? 2 : 1;
         moved = true;
         break;
       }
