@@ -315,14 +315,24 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
   // seen is shared by the workers: a flood marks only faces of its own cluster, and unmarks them
   // when done (so a later flood of the same cluster, in the next pass, starts clean).
   std::vector<uint8_t> seen(faces, 0);
+  // A vertex's ring before its move, what its tried points are judged against (read_ring).
+  struct RingBefore {
+    uint32_t v, count;  // the vertex, its triangles
+    Vec3 p, full;       // its position, the step to the mean of its neighbours
+    double min_tan;     // the smallest angle's tan over its triangles
+    // Per triangle: its other two corners (2 per triangle, in its orientation after v), its unit
+    // normal, its shape.
+    std::vector<Vec3> corners, normals;
+    std::vector<Shape> shapes;
+  };
+  // Vertices whose rings are read before their decompositions run side by side (kLanes of them,
+  // symmetric_eigen3_lanes: most of its time is the latency of its chain of roots and divisions).
+  constexpr int kLanes = 2;
   struct Scratch {
     std::vector<uint32_t> flood, visited;
     std::vector<Vec3> cluster_points;
-    // Per triangle at the vertex being moved: its other two corners (2 per triangle, in its
-    // orientation after the vertex), its unit normal and shape before the move, its shape at the
-    // tried point.
-    std::vector<Vec3> corners, old_normals;
-    std::vector<Shape> old_shapes, new_shapes;
+    RingBefore before[kLanes];
+    std::vector<Shape> new_shapes;  // per triangle at the vertex being moved, at the tried point
   };
   auto gather = [&](uint32_t c, uint32_t start, Scratch& w) {
     w.cluster_points.clear();
@@ -370,46 +380,56 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
   // Per vertex in this pass: 1 moved, 2 moved far enough to wake its ring for the next pass.
   std::vector<uint8_t> outcome(n, 0);
   std::vector<Scratch> scratch(pool.size());
-  // One vertex's move (or none): reads the ring, writes v's position, home and outcome only.
-  auto relax_vertex = [&](uint32_t v, Scratch& w) {
+  // Reads v's ring before its move into r, and the sum of area * n n^T over its triangles.
+  auto read_ring = [&](uint32_t v, RingBefore& r, double tensor[3][3]) {
     const uint32_t* triangles_at = ring.data() + ring_offsets[v];
     const uint32_t count = ring_offsets[v + 1] - ring_offsets[v];
     const Vec3 p = point_of(&coarse.positions[3 * size_t(v)]);
-    // The ring, read once: every tried point reads it again.
-    w.corners.resize(2 * size_t(count));
-    w.old_normals.resize(count);
-    w.old_shapes.resize(count);
-    w.new_shapes.resize(count);
+    r.v = v;
+    r.count = count;
+    r.p = p;
+    // The corners, read once: every tried point reads them again.
+    r.corners.resize(2 * size_t(count));
+    r.normals.resize(count);
+    r.shapes.resize(count);
     for (uint32_t i = 0; i < count; ++i) {
       const uint32_t* tri = &coarse.indices[3 * size_t(triangles_at[i])];
       const int k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
-      w.corners[2 * i] = point_of(&coarse.positions[3 * size_t(tri[(k + 1) % 3])]);
-      w.corners[2 * i + 1] = point_of(&coarse.positions[3 * size_t(tri[(k + 2) % 3])]);
+      r.corners[2 * i] = point_of(&coarse.positions[3 * size_t(tri[(k + 1) % 3])]);
+      r.corners[2 * i + 1] = point_of(&coarse.positions[3 * size_t(tri[(k + 2) % 3])]);
     }
-    double old_min = INFINITY;  // old_min, new_min: tan of the smallest angle
+    double old_min = INFINITY;
     Vec3 target = {0, 0, 0};
-    double tensor[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // sum of area * n n^T over the ring
+    for (int row = 0; row < 3; ++row)
+      for (int k = 0; k < 3; ++k) tensor[row][k] = 0;
     for (uint32_t i = 0; i < count; ++i) {
-      const Vec3 b = w.corners[2 * i], c = w.corners[2 * i + 1];
-      w.old_shapes[i] = triangle_shape(p, b, c);
-      old_min = std::min(old_min, w.old_shapes[i].min_tan);
+      const Vec3 b = r.corners[2 * i], c = r.corners[2 * i + 1];
+      r.shapes[i] = triangle_shape(p, b, c);
+      old_min = std::min(old_min, r.shapes[i].min_tan);
       // In a closed fan every neighbour is a corner of two triangles: this sums each twice.
       target = target + 0.5 * (b + c);
       const Vec3 m = cross(b - p, c - p);
       const double l = length(m);
       const Vec3 u = l > 0 ? (1.0 / l) * m : Vec3{0, 0, 0};
-      w.old_normals[i] = u;
+      r.normals[i] = u;
       const double e[3] = {u.x, u.y, u.z};
-      for (int r = 0; r < 3; ++r)
-        for (int k = 0; k < 3; ++k) tensor[r][k] += 0.5 * l * e[r] * e[k];
+      for (int row = 0; row < 3; ++row)
+        for (int k = 0; k < 3; ++k) tensor[row][k] += 0.5 * l * e[row] * e[k];
     }
     target = (1.0 / double(count)) * target;
-    const Vec3 full = target - p;
+    r.full = target - p;
+    r.min_tan = old_min;
+  };
+  // r.v's move (or none), given its ring and the decomposition of its tensor: writes v's position,
+  // home and outcome only.
+  auto move_vertex = [&](const RingBefore& r, const double values[3], const double vectors[3][3], Scratch& w) {
+    const uint32_t v = r.v, count = r.count;
+    const Vec3 p = r.p, full = r.full;
+    const double old_min = r.min_tan;  // old_min, new_min: tan of the smallest angle
+    w.new_shapes.resize(count);
     // The directions the ring's normals leave free: both tangent directions on a flat ring, the
     // crease's direction on a crease, none at a corner. Steps along them keep the ring's shape;
     // across them they would cut the crease or corner and take the coarse mesh off the input.
-    double values[3], vectors[3][3];
-    symmetric_eigen3(tensor, values, vectors);
     const double largest = std::max({values[0], values[1], values[2]});
     if (!(largest > 0)) return;
     Vec3 free_step = {0, 0, 0};
@@ -453,10 +473,10 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
         double new_min = INFINITY;
         bool refused = false;
         for (uint32_t i = 0; i < count && !refused; ++i) {
-          const Vec3 b = w.corners[2 * i], c = w.corners[2 * i + 1];
+          const Vec3 b = r.corners[2 * i], c = r.corners[2 * i + 1];
           const Vec3 m = cross(b - np, c - np);
           const double l = length(m);
-          if (!(l > 0) || !(dot(m, w.old_normals[i]) >= min_cos * l)) {
+          if (!(l > 0) || !(dot(m, r.normals[i]) >= min_cos * l)) {
             refused = true;
             break;
           }
@@ -466,7 +486,7 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
         }
         if (refused) continue;
         if (attempt == 0 && !(new_min > old_min)) {
-          if (!have_old_q) old_q = quality_sum(w.old_shapes, count), have_old_q = true;
+          if (!have_old_q) old_q = quality_sum(r.shapes, count), have_old_q = true;
           if (!(quality_sum(w.new_shapes, count) > old_q)) continue;
         }
         // Across a feature the move must not take the ring farther from its cluster's points.
@@ -474,7 +494,7 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
         for (int d = 0; d < 3; ++d) coarse.positions[3 * size_t(v) + d] = stored[d];
         home[v] = face;
         double edge_sum = 0;  // for the mean ring edge
-        for (uint32_t i = 0; i < count; ++i) edge_sum += length(w.corners[2 * i] - p);
+        for (uint32_t i = 0; i < count; ++i) edge_sum += length(r.corners[2 * i] - p);
         outcome[v] = length(np - p) >= kWakeFraction * edge_sum / double(count) ? 2 : 1;
         moved = true;
         break;
@@ -482,14 +502,28 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       if (moved) break;
     }
   };
+  // Vertices of one class, kLanes at a time: their rings, their decompositions side by side,
+  // their moves. They share no triangle: no order among them changes anything.
+  auto relax_vertices = [&](const uint32_t* vs, int lanes, Scratch& w) {
+    double tensors[kLanes][3][3], values[kLanes][3], vectors[kLanes][3][3];
+    for (int lane = 0; lane < lanes; ++lane) read_ring(vs[lane], w.before[lane], tensors[lane]);
+    symmetric_eigen3_lanes<kLanes>(lanes, tensors, values, vectors);
+    for (int lane = 0; lane < lanes; ++lane) move_vertex(w.before[lane], values[lane], vectors[lane], w);
+  };
   uint64_t moves = 0;
   for (uint32_t pass = 0; pass < passes; ++pass) {
     std::fill(outcome.begin(), outcome.end(), uint8_t(0));
     for (size_t c = 0; c + 1 < class_offsets.size(); ++c) {
       const uint32_t* members = &class_vertices[class_offsets[c]];
       pool.run(class_offsets[c + 1] - class_offsets[c], [&](size_t first, size_t last, unsigned worker) {
-        for (size_t i = first; i < last; ++i)
-          if (active[members[i]]) relax_vertex(members[i], scratch[worker]);
+        uint32_t lane_vertices[kLanes];
+        int lanes = 0;
+        for (size_t i = first; i < last; ++i) {
+          if (!active[members[i]]) continue;
+          lane_vertices[lanes++] = members[i];
+          if (lanes == kLanes) relax_vertices(lane_vertices, lanes, scratch[worker]), lanes = 0;
+        }
+        if (lanes > 0) relax_vertices(lane_vertices, lanes, scratch[worker]);
       }, kMinParallelVertices);
     }
     bool awake = false;
