@@ -466,7 +466,12 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
         // Judged at the float position it will be stored as.
         const float stored[3] = {float(onto[0]), float(onto[1]), float(onto[2])};
         const Vec3 np = point_of(stored);
-        if (np.x == p.x && np.y == p.y && np.z == p.z) break;  // no move left
+        // No move left: the stored floats are v's. (Not `np == p`: GCC 12.2's SLP vectorizer, -O2
+        // and up, drops the float round trip of np.x and np.y, in that test and in the judging
+        // below; as floats the test stays exact. The judging is a separate matter: fixing it
+        // changes meshes.)
+        const float* at = &coarse.positions[3 * size_t(v)];
+        if (stored[0] == at[0] && stored[1] == at[1] && stored[2] == at[2]) break;
         // Refused at the first triangle that folds, or once the smallest angle is below what a
         // better point needs: new_min only falls as triangles are added (std::min keeps the
         // number when a min_tan is NaN, so the whole ring's new_min would fail the same test).
