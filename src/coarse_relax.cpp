@@ -36,7 +36,15 @@
 // the other, class by class, so it does not depend on the thread count. (Until the eighth session
 // the pass went in plain vertex order on one thread: 73 of the 200 ms of coarsening the 1.2M bunny
 // -> 10k. The order changes single moves, not the quality: Table 1's rows moved by at most 0.3
-// degrees of minimum angle.)
+// degrees of minimum angle.) Nearly every vertex moves in every pass (fandisk -> 1000: 2625 moves
+// in 2996 visits), so a visit's cost is what counts; per visit, on fandisk: the ring's shapes and
+// normal tensor, a Jacobi decomposition (~7 rotations), one walk of ~4 closest-point tests per
+// tried point, the shapes at the tried point. Hence: a worker reads two rings of its class before
+// decomposing both side by side (each rotation is a chain of dependent divisions and roots that
+// the other fills), a shape takes Q's three roots and division only where the comparison comes
+// down to Q, and a tried point is dropped at its first failing triangle. Each of these does the
+// same operations on every value that decides anything, so the meshes are the same to the bit as
+// before them (one thread, fandisk -> 1000: 3.5 -> 2.6 ms; bunny00 -> 500: 1.9 -> 1.4 ms).
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -86,24 +94,74 @@ struct Shape {
   // tan of the smallest angle: the smallest angle of a triangle is at most 60 degrees, where tan
   // grows with the angle, so comparing it compares angles without an atan2.
   double min_tan;
-  double q;  // (6 / sqrt 3) area / (semi-perimeter * longest edge), 1 when equilateral
+  // What Q (quality()) takes besides: twice the area and the squared edge lengths. Most tried
+  // points are decided by the smallest angle alone, and Q's three square roots and division were
+  // half the cost of a shape.
+  double twice_area, ab2, bc2, ca2;
 };
 
-Shape triangle_shape(Vec3 a, Vec3 b, Vec3 c) {
+// sqrt(x) <= sqrt(y) for squared lengths, as the rounded roots compare, mostly without taking
+// them: a correctly rounded sqrt never reverses an order, and squares more than 1e-12 apart
+// (relative) have roots farther apart than their rounding. Near-ties, and values too small or
+// not finite for that margin, take the roots.
+bool root_le(double x, double y) {
+  if (x <= y) return true;
+  if (y > 1e-280 && x > y * (1 + 1e-12)) return false;
+  return std::sqrt(x) <= std::sqrt(y);
+}
+
+// (inline: called out of line, its corners and result went through memory, 6% of the
+// instructions of relax.)
+inline Shape triangle_shape(Vec3 a, Vec3 b, Vec3 c) {
   const Vec3 ab = b - a, bc = c - b, ca = a - c;
-  const double lab = length(ab), lbc = length(bc), lca = length(ca);
+  const double ab2 = dot(ab, ab), bc2 = dot(bc, bc), ca2 = dot(ca, ca);
   const double twice_area = length(cross(ab, bc));
-  // The smallest angle is opposite the shortest edge; its cosine times the two edges beside it:
-  const double adjacent = lab <= lbc && lab <= lca ? -dot(bc, ca)   // at c
-                          : lbc <= lca             ? -dot(ca, ab)   // at a
-                                                   : -dot(ab, bc);  // at b
+  // The smallest angle is opposite the shortest edge (edges compared as their lengths compare);
+  // its cosine times the two edges beside it:
+  const double adjacent = root_le(ab2, bc2) && root_le(ab2, ca2) ? -dot(bc, ca)   // at c
+                          : root_le(bc2, ca2)                    ? -dot(ca, ab)   // at a
+                                                                 : -dot(ab, bc);  // at b
   const double min_tan = twice_area > 0 ? (adjacent > 0 ? twice_area / adjacent : INFINITY) : 0.0;
+  return {min_tan, twice_area, ab2, bc2, ca2};
+}
+
+// Q = (6 / sqrt 3) area / (semi-perimeter * longest edge), 1 when equilateral.
+double quality(const Shape& s) {
+  const double lab = std::sqrt(s.ab2), lbc = std::sqrt(s.bc2), lca = std::sqrt(s.ca2);
   const double longest = std::max({lab, lbc, lca});
   const double denominator = 0.5 * (lab + lbc + lca) * longest;
-  return {min_tan, denominator > 0 ? (3.0 / std::sqrt(3.0)) * twice_area / denominator : 0.0};
+  return denominator > 0 ? (3.0 / std::sqrt(3.0)) * s.twice_area / denominator : 0.0;
+}
+
+// The sum of Q over the first `count` shapes, in order (every sum of a ring adds in one order).
+double quality_sum(const std::vector<Shape>& shapes, uint32_t count) {
+  double sum = 0;
+  for (uint32_t i = 0; i < count; ++i) sum += quality(shapes[i]);
+  return sum;
 }
 
 Vec3 point_of(const float* p) { return {p[0], p[1], p[2]}; }
+
+// Whether every edge at v has exactly two triangles, using it in opposite directions, and no
+// triangle at v repeats a vertex: then the corners after v in its triangles and the corners before
+// v are the same neighbours, each once. Only triangles at v have an edge at v, so v's own ring
+// decides (a bad edge makes both its ends stay; each end finds it in its own ring). [first, last):
+// the triangles at v; after, before: scratch.
+bool ring_is_closed_disk(const Mesh& coarse, const uint32_t* first, const uint32_t* last, uint32_t v,
+                         std::vector<uint32_t>& after, std::vector<uint32_t>& before) {
+  after.clear();
+  before.clear();
+  for (const uint32_t* t = first; t != last; ++t) {
+    const uint32_t* tri = &coarse.indices[3 * size_t(*t)];
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) return false;
+    const int k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+    after.push_back(tri[(k + 1) % 3]);
+    before.push_back(tri[(k + 2) % 3]);
+  }
+  std::sort(after.begin(), after.end());
+  std::sort(before.begin(), before.end());
+  return after == before && std::adjacent_find(after.begin(), after.end()) == after.end();
+}
 
 }  // namespace
 
@@ -161,33 +219,13 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       }
   // Movable: every edge at the vertex has exactly two triangles using it in opposite directions,
   // no triangle repeats the vertex, it has three or more triangles and its cluster has faces.
-  std::vector<uint8_t> movable(n, 1);
+  std::vector<uint8_t> movable(n, 0);
   {
-    std::vector<uint64_t> half_edges;  // undirected key << 1 | direction
-    half_edges.reserve(3 * triangles);
-    for (size_t t = 0; t < triangles; ++t) {
-      const uint32_t* tri = &coarse.indices[3 * t];
-      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2])
-        for (int k = 0; k < 3; ++k) movable[tri[k]] = 0;
-      for (int k = 0; k < 3; ++k) {
-        uint32_t a = tri[k], b = tri[(k + 1) % 3];
-        uint64_t key = a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a);
-        half_edges.push_back(key << 1 | uint64_t(a < b));
-      }
-    }
-    std::sort(half_edges.begin(), half_edges.end());
-    for (size_t i = 0; i < half_edges.size();) {
-      size_t j = i;
-      while (j < half_edges.size() && half_edges[j] >> 1 == half_edges[i] >> 1) ++j;
-      bool manifold = j - i == 2 && (half_edges[i] & 1) != (half_edges[i + 1] & 1);
-      if (!manifold) {
-        uint64_t key = half_edges[i] >> 1;
-        movable[uint32_t(key >> 32)] = movable[uint32_t(key)] = 0;
-      }
-      i = j;
-    }
-    for (size_t v = 0; v < n; ++v)
-      if (home[v] == kNone || ring_offsets[v + 1] - ring_offsets[v] < 3) movable[v] = 0;
+    std::vector<uint32_t> after, before;  // per ring triangle of v: the corner after v, before v
+    for (uint32_t v = 0; v < n; ++v)
+      if (home[v] != kNone && ring_offsets[v + 1] - ring_offsets[v] >= 3)
+        movable[v] = ring_is_closed_disk(coarse, ring.data() + ring_offsets[v], ring.data() + ring_offsets[v + 1], v,
+                                         after, before);
   }
 
   // A point of cluster c's faces near q: from the face `home` (in c), step to the edge-neighbour
@@ -203,12 +241,14 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       return closest_point_on_triangle(q, corner[0], corner[1], corner[2], point);
     };
     double best = distance(at, out);
+    // The face the walk came from is strictly farther than `at`: never taken again, not measured.
+    uint32_t from = kNone;
     for (uint32_t steps = 0; steps < kMaxWalkSteps; ++steps) {
       uint32_t next = kNone;
       double next_point[3] = {0, 0, 0}, next_best = best;
       for (int e = 0; e < 3; ++e) {
         const uint32_t g = topology.face_adjacent[3 * size_t(at) + e];
-        if (g == kNone || labels[g] != c) continue;
+        if (g == kNone || g == from || labels[g] != c) continue;
         double point[3];
         const double d2 = distance(g, point);
         if (d2 < next_best) {  // ties: the lower edge index
@@ -219,6 +259,7 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       }
       if (next == kNone) break;
       best = next_best;
+      from = at;
       at = next;
       for (int d = 0; d < 3; ++d) out[d] = next_point[d];
     }
@@ -250,21 +291,20 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
   // them one after the other class by class, whatever the thread count.
   std::vector<uint32_t> class_offsets, class_vertices;
   {
-    std::vector<uint32_t> color(n, kNone), used;
+    // used_by[c] == v: a neighbour of v already has color c (no sort of the neighbours' colors).
+    std::vector<uint32_t> color(n, kNone), used_by;
     uint32_t classes = 0;
     for (uint32_t v = 0; v < n; ++v) {
       if (!movable[v]) continue;
-      used.clear();
       for (uint32_t i = ring_offsets[v]; i < ring_offsets[v + 1]; ++i)
         for (int k = 0; k < 3; ++k) {
           const uint32_t w = coarse.indices[3 * size_t(ring[i]) + k];
-          if (w != v && color[w] != kNone) used.push_back(color[w]);
+          if (w == v || color[w] == kNone) continue;
+          if (color[w] >= used_by.size()) used_by.resize(color[w] + 1, kNone);
+          used_by[color[w]] = v;
         }
-      std::sort(used.begin(), used.end());
       uint32_t c = 0;
-      for (uint32_t u : used)
-        if (u == c) ++c;
-        else if (u > c) break;
+      while (c < used_by.size() && used_by[c] == v) ++c;
       color[v] = c;
       classes = std::max(classes, c + 1);
     }
@@ -283,9 +323,24 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
   // seen is shared by the workers: a flood marks only faces of its own cluster, and unmarks them
   // when done (so a later flood of the same cluster, in the next pass, starts clean).
   std::vector<uint8_t> seen(faces, 0);
+  // A vertex's ring before its move, what its tried points are judged against (read_ring).
+  struct RingBefore {
+    uint32_t v, count;  // the vertex, its triangles
+    Vec3 p, full;       // its position, the step to the mean of its neighbours
+    double min_tan;     // the smallest angle's tan over its triangles
+    // Per triangle: its other two corners (2 per triangle, in its orientation after v), its unit
+    // normal, its shape.
+    std::vector<Vec3> corners, normals;
+    std::vector<Shape> shapes;
+  };
+  // Vertices whose rings are read before their decompositions run side by side (kLanes of them,
+  // symmetric_eigen3_lanes: most of its time is the latency of its chain of roots and divisions).
+  constexpr int kLanes = 2;
   struct Scratch {
     std::vector<uint32_t> flood, visited;
-    std::vector<Vec3> cluster_points, old_normals;
+    std::vector<Vec3> cluster_points;
+    RingBefore before[kLanes];
+    std::vector<Shape> new_shapes;  // per triangle at the vertex being moved, at the tried point
   };
   auto gather = [&](uint32_t c, uint32_t start, Scratch& w) {
     w.cluster_points.clear();
@@ -333,47 +388,56 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
   // Per vertex in this pass: 1 moved, 2 moved far enough to wake its ring for the next pass.
   std::vector<uint8_t> outcome(n, 0);
   std::vector<Scratch> scratch(pool.size());
-  // One vertex's move (or none): reads the ring, writes v's position, home and outcome only.
-  auto relax_vertex = [&](uint32_t v, Scratch& w) {
-    std::vector<Vec3>& old_normals = w.old_normals;
-    const uint32_t begin = ring_offsets[v], end = ring_offsets[v + 1];
+  // Reads v's ring before its move into r, and the sum of area * n n^T over its triangles.
+  auto read_ring = [&](uint32_t v, RingBefore& r, double tensor[3][3]) {
+    const uint32_t* triangles_at = ring.data() + ring_offsets[v];
+    const uint32_t count = ring_offsets[v + 1] - ring_offsets[v];
     const Vec3 p = point_of(&coarse.positions[3 * size_t(v)]);
-    // The other two corners of an incident triangle, in its orientation after v.
-    auto others = [&](uint32_t t, Vec3& b, Vec3& c) {
-      const uint32_t* tri = &coarse.indices[3 * size_t(t)];
+    r.v = v;
+    r.count = count;
+    r.p = p;
+    // The corners, read once: every tried point reads them again.
+    r.corners.resize(2 * size_t(count));
+    r.normals.resize(count);
+    r.shapes.resize(count);
+    for (uint32_t i = 0; i < count; ++i) {
+      const uint32_t* tri = &coarse.indices[3 * size_t(triangles_at[i])];
       const int k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
-      b = point_of(&coarse.positions[3 * size_t(tri[(k + 1) % 3])]);
-      c = point_of(&coarse.positions[3 * size_t(tri[(k + 2) % 3])]);
-    };
-    double old_min = INFINITY, old_q = 0, edge_sum = 0;  // old_min, new_min: tan of the smallest angle
+      r.corners[2 * i] = point_of(&coarse.positions[3 * size_t(tri[(k + 1) % 3])]);
+      r.corners[2 * i + 1] = point_of(&coarse.positions[3 * size_t(tri[(k + 2) % 3])]);
+    }
+    double old_min = INFINITY;
     Vec3 target = {0, 0, 0};
-    double tensor[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // sum of area * n n^T over the ring
-    old_normals.clear();
-    for (uint32_t i = begin; i < end; ++i) {
-      Vec3 b, c;
-      others(ring[i], b, c);
-      const Shape s = triangle_shape(p, b, c);
-      old_min = std::min(old_min, s.min_tan);
-      old_q += s.q;
-      edge_sum += length(b - p);
+    for (int row = 0; row < 3; ++row)
+      for (int k = 0; k < 3; ++k) tensor[row][k] = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+      const Vec3 b = r.corners[2 * i], c = r.corners[2 * i + 1];
+      r.shapes[i] = triangle_shape(p, b, c);
+      old_min = std::min(old_min, r.shapes[i].min_tan);
       // In a closed fan every neighbour is a corner of two triangles: this sums each twice.
       target = target + 0.5 * (b + c);
       const Vec3 m = cross(b - p, c - p);
       const double l = length(m);
       const Vec3 u = l > 0 ? (1.0 / l) * m : Vec3{0, 0, 0};
-      old_normals.push_back(u);
+      r.normals[i] = u;
       const double e[3] = {u.x, u.y, u.z};
-      for (int r = 0; r < 3; ++r)
-        for (int k = 0; k < 3; ++k) tensor[r][k] += 0.5 * l * e[r] * e[k];
+      for (int row = 0; row < 3; ++row)
+        for (int k = 0; k < 3; ++k) tensor[row][k] += 0.5 * l * e[row] * e[k];
     }
-    const double count = double(end - begin);
-    target = (1.0 / count) * target;
-    const Vec3 full = target - p;
+    target = (1.0 / double(count)) * target;
+    r.full = target - p;
+    r.min_tan = old_min;
+  };
+  // r.v's move (or none), given its ring and the decomposition of its tensor: writes v's position,
+  // home and outcome only.
+  auto move_vertex = [&](const RingBefore& r, const double values[3], const double vectors[3][3], Scratch& w) {
+    const uint32_t v = r.v, count = r.count;
+    const Vec3 p = r.p, full = r.full;
+    const double old_min = r.min_tan;  // old_min, new_min: tan of the smallest angle
+    w.new_shapes.resize(count);
     // The directions the ring's normals leave free: both tangent directions on a flat ring, the
     // crease's direction on a crease, none at a corner. Steps along them keep the ring's shape;
     // across them they would cut the crease or corner and take the coarse mesh off the input.
-    double values[3], vectors[3][3];
-    symmetric_eigen3(tensor, values, vectors);
     const double largest = std::max({values[0], values[1], values[2]});
     if (!(largest > 0)) return;
     Vec3 free_step = {0, 0, 0};
@@ -388,6 +452,8 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
     // A vertex of a triangle below kRescueTan (33 degrees) may also step across a feature, tangent to the
     // ring's mean plane, if that lifts its smallest angle: rare, and what it takes on creases.
     const bool rescue = old_min < kRescueTan;
+    double old_q = 0;  // the ring's sum of Q before the move, once a tried point needs it
+    bool have_old_q = false;
     for (int attempt = 0; attempt < (rescue ? 2 : 1); ++attempt) {
       const Vec3 step = attempt == 0 ? free_step : tangent_step;
       if (!(dot(step, step) > 0)) continue;
@@ -396,6 +462,9 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
         gather(v, home[v], w);
         old_error = ring_error(v, p, w.cluster_points);
       }
+      // A better point keeps the smallest angle at or above `floor` and lifts it or (along the
+      // free directions only) the sum of Q; across a feature the floor is the old angle itself.
+      const double floor = attempt == 0 ? std::min(old_min, kSafeTan) : old_min;
       bool moved = false;
       for (double fraction : kStepFractions) {
         const double q[3] = {p.x + fraction * step.x, p.y + fraction * step.y, p.z + fraction * step.z};
@@ -405,34 +474,54 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
         // Judged at the float position it will be stored as.
         const float stored[3] = {float(onto[0]), float(onto[1]), float(onto[2])};
         const Vec3 np = point_of(stored);
-        if (np.x == p.x && np.y == p.y && np.z == p.z) break;  // no move left
-        double new_min = INFINITY, new_q = 0;
-        bool folds = false;
-        for (uint32_t i = begin; i < end && !folds; ++i) {
-          Vec3 b, c;
-          others(ring[i], b, c);
+        // No move left: the stored floats are v's. (Not `np == p`: GCC 12.2's SLP vectorizer, -O2
+        // and up, drops the float round trip of np.x and np.y, in that test and in the judging
+        // below; as floats the test stays exact. The judging is a separate matter: fixing it
+        // changes meshes.)
+        const float* at = &coarse.positions[3 * size_t(v)];
+        if (stored[0] == at[0] && stored[1] == at[1] && stored[2] == at[2]) break;
+        // Refused at the first triangle that folds, or once the smallest angle is below what a
+        // better point needs: new_min only falls as triangles are added (std::min keeps the
+        // number when a min_tan is NaN, so the whole ring's new_min would fail the same test).
+        double new_min = INFINITY;
+        bool refused = false;
+        for (uint32_t i = 0; i < count && !refused; ++i) {
+          const Vec3 b = r.corners[2 * i], c = r.corners[2 * i + 1];
           const Vec3 m = cross(b - np, c - np);
           const double l = length(m);
-          folds = !(l > 0) || !(dot(m, old_normals[i - begin]) >= min_cos * l);
-          const Shape s = triangle_shape(np, b, c);
-          new_min = std::min(new_min, s.min_tan);
-          new_q += s.q;
+          if (!(l > 0) || !(dot(m, r.normals[i]) >= min_cos * l)) {
+            refused = true;
+            break;
+          }
+          w.new_shapes[i] = triangle_shape(np, b, c);
+          new_min = std::min(new_min, w.new_shapes[i].min_tan);
+          refused = attempt == 0 ? new_min < floor : !(new_min > floor);
         }
-        if (folds) continue;
-        const bool better = attempt == 0
-                                ? new_min >= std::min(old_min, kSafeTan) && (new_min > old_min || new_q > old_q)
-                                : new_min > old_min;
-        if (!better) continue;
+        if (refused) continue;
+        if (attempt == 0 && !(new_min > old_min)) {
+          if (!have_old_q) old_q = quality_sum(r.shapes, count), have_old_q = true;
+          if (!(quality_sum(w.new_shapes, count) > old_q)) continue;
+        }
         // Across a feature the move must not take the ring farther from its cluster's points.
         if (attempt == 1 && ring_error(v, np, w.cluster_points) > kRescueErrorGrowth * old_error) continue;
         for (int d = 0; d < 3; ++d) coarse.positions[3 * size_t(v) + d] = stored[d];
         home[v] = face;
-        outcome[v] = length(np - p) >= kWakeFraction * edge_sum / count ? 2 : 1;
+        double edge_sum = 0;  // for the mean ring edge
+        for (uint32_t i = 0; i < count; ++i) edge_sum += length(r.corners[2 * i] - p);
+        outcome[v] = length(np - p) >= kWakeFraction * edge_sum / double(count) ? 2 : 1;
         moved = true;
         break;
       }
       if (moved) break;
     }
+  };
+  // Vertices of one class, kLanes at a time: their rings, their decompositions side by side,
+  // their moves. They share no triangle: no order among them changes anything.
+  auto relax_vertices = [&](const uint32_t* vs, int lanes, Scratch& w) {
+    double tensors[kLanes][3][3], values[kLanes][3], vectors[kLanes][3][3];
+    for (int lane = 0; lane < lanes; ++lane) read_ring(vs[lane], w.before[lane], tensors[lane]);
+    symmetric_eigen3_lanes<kLanes>(lanes, tensors, values, vectors);
+    for (int lane = 0; lane < lanes; ++lane) move_vertex(w.before[lane], values[lane], vectors[lane], w);
   };
   uint64_t moves = 0;
   for (uint32_t pass = 0; pass < passes; ++pass) {
@@ -440,8 +529,14 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
     for (size_t c = 0; c + 1 < class_offsets.size(); ++c) {
       const uint32_t* members = &class_vertices[class_offsets[c]];
       pool.run(class_offsets[c + 1] - class_offsets[c], [&](size_t first, size_t last, unsigned worker) {
-        for (size_t i = first; i < last; ++i)
-          if (active[members[i]]) relax_vertex(members[i], scratch[worker]);
+        uint32_t lane_vertices[kLanes];
+        int lanes = 0;
+        for (size_t i = first; i < last; ++i) {
+          if (!active[members[i]]) continue;
+          lane_vertices[lanes++] = members[i];
+          if (lanes == kLanes) relax_vertices(lane_vertices, lanes, scratch[worker]), lanes = 0;
+        }
+        if (lanes > 0) relax_vertices(lane_vertices, lanes, scratch[worker]);
       }, kMinParallelVertices);
     }
     bool awake = false;

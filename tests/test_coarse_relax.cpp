@@ -65,20 +65,26 @@ UnrelaxedDual unrelaxed_dual(const Mesh& input, const Topology& topology, uint32
   return d;
 }
 
-}  // namespace
-
-TEST_CASE("coarse relax: a hexagon whose centre vertex sits off-centre in its cluster gets fat triangles") {
-  // Input: a fine flat grid. Clusters (by face centroid): a disk of radius 0.25 around a regular
-  // hexagon's centre, the rest to the nearest corner. Coarse mesh: the hexagon's fan, the centre
-  // vertex placed inside its own cluster but near one corner, which gives angles below 30 degrees.
-  Mesh input = test::grid(60, 60);
+// Input: a fine flat grid. Clusters (by face centroid): a disk of radius 0.25 around a regular
+// hexagon's centre, the rest to the nearest corner. Coarse mesh: the hexagon's fan, the centre
+// vertex placed inside its own cluster but near one corner, which gives angles below 30 degrees.
+struct OffCentreHexagon {
+  Mesh input;
+  std::vector<uint32_t> labels;
+  Mesh coarse;
+};
+OffCentreHexagon off_centre_hexagon() {
+  OffCentreHexagon h;
+  h.input = test::grid(60, 60);
+  const Mesh& input = h.input;
   const double cx = 0.5, cy = 0.5, radius = 0.3;
   double site[7][2] = {{cx, cy}};
   for (int k = 0; k < 6; ++k) {
     site[k + 1][0] = cx + radius * std::cos(k * std::numbers::pi / 3);
     site[k + 1][1] = cy + radius * std::sin(k * std::numbers::pi / 3);
   }
-  std::vector<uint32_t> labels(input.face_count());
+  std::vector<uint32_t>& labels = h.labels;
+  labels.resize(input.face_count());
   for (size_t f = 0; f < input.face_count(); ++f) {
     double gx = 0, gy = 0;
     for (int j = 0; j < 3; ++j) {
@@ -91,10 +97,17 @@ TEST_CASE("coarse relax: a hexagon whose centre vertex sits off-centre in its cl
       if (std::hypot(gx - site[s][0], gy - site[s][1]) < std::hypot(gx - site[best][0], gy - site[best][1])) best = s;
     labels[f] = best;
   }
-  Mesh coarse;
+  Mesh& coarse = h.coarse;
   test::add_vertex(coarse, cx + 0.2, cy + 0.03, 0);  // inside the centre disk, near corner 1
   for (int k = 0; k < 6; ++k) test::add_vertex(coarse, site[k + 1][0], site[k + 1][1], 0);
   for (uint32_t k = 0; k < 6; ++k) test::add_triangle(coarse, 0, 1 + k, 1 + (k + 1) % 6);
+  return h;
+}
+
+}  // namespace
+
+TEST_CASE("coarse relax: a hexagon whose centre vertex sits off-centre in its cluster gets fat triangles") {
+  const auto [input, labels, coarse] = off_centre_hexagon();
   REQUIRE(distance_to_cluster(coarse, 0, input, labels, 0) < 1e-6);
   const TriangleQuality before = triangle_quality(coarse);
   REQUIRE(before.min_angle_deg < 30);
@@ -119,6 +132,27 @@ TEST_CASE("coarse relax: a hexagon whose centre vertex sits off-centre in its cl
   Mesh none = coarse;
   CHECK(relax_coarse_vertices(none, input, topology, labels, 0) == 0);
   CHECK(none.positions == coarse.positions);
+}
+
+TEST_CASE("coarse relax: a vertex at an edge that is not two consistently oriented triangles stays") {
+  // The hexagon's centre moves as built (first case); each of these defects at its edges keeps it
+  // where it is: a fan triangle turned over, one repeated, a fin on a spoke, a triangle repeating it.
+  const auto [input, labels, coarse] = off_centre_hexagon();
+  const Topology topology = build_topology(input);
+  for (int defect = 0; defect < 4; ++defect) {
+    CAPTURE(defect);
+    Mesh broken = coarse;
+    if (defect == 0) std::swap(broken.indices[1], broken.indices[2]);
+    if (defect == 1) test::add_triangle(broken, 0, 1, 2);
+    if (defect == 2) {
+      test::add_vertex(broken, 0.5f, 0.5f, 0.3f);  // a cluster without faces
+      test::add_triangle(broken, 1, 0, 7);
+    }
+    if (defect == 3) test::add_triangle(broken, 0, 0, 4);
+    const Mesh before = broken;
+    CHECK(relax_coarse_vertices(broken, input, topology, labels) == 0);
+    CHECK(broken.positions == before.positions);
+  }
 }
 
 TEST_CASE("coarse relax: on a clustered torus vertices stay on their clusters and the smallest angle never drops") {
