@@ -190,8 +190,8 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg = 25, uint32_t ma
 /// cluster's corners within 1.5x of their old largest distance to its triangles. So the mesh's
 /// smallest angle never drops below min(its old value, 35 deg). Vertices off their cluster's faces
 /// (qem points placed off the surface), on a boundary or at a non-manifold edge stay. Passes visit
-/// the vertices whose ring moved in the previous pass, in vertex order (deterministic), until none
-/// moves, at most `passes`.
+/// the vertices whose ring moved in the previous pass, in classes of vertices that share no
+/// triangle (a greedy coloring in vertex order, deterministic), until none moves, at most `passes`.
 ///
 /// coarse   : the coarse mesh, vertex i standing for cluster i (as coarsen_clustering builds it);
 ///            positions (input units) are changed in place, triangles are not.
