@@ -474,10 +474,9 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
         // Judged at the float position it will be stored as.
         const float stored[3] = {float(onto[0]), float(onto[1]), float(onto[2])};
         const Vec3 np = point_of(stored);
-        // No move left: the stored floats are v's. (Not `np == p`: GCC 12.2's SLP vectorizer, -O2
-        // and up, drops the float round trip of np.x and np.y, in that test and in the judging
-        // below; as floats the test stays exact. The judging is a separate matter: fixing it
-        // changes meshes.)
+        // No move left: the stored floats are v's. (Compared as floats: GCC 12.2's SLP vectorizer
+        // dropped the float round trip of np.x and np.y, here and in the judging below; this file
+        // is now built without it, see CMakeLists.txt.)
         const float* at = &coarse.positions[3 * size_t(v)];
         if (stored[0] == at[0] && stored[1] == at[1] && stored[2] == at[2]) break;
         // Refused at the first triangle that folds, or once the smallest angle is below what a
