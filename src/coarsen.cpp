@@ -252,7 +252,13 @@ void count_components(const Mesh& mesh, const Topology& topology, const std::vec
 class FanWalker {
  public:
   FanWalker(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels, DualStructure& dual)
-      : mesh_(mesh), topology_(topology), labels_(labels), dual_(dual), cluster_seen_at_(dual.faces.size(), kNone) {}
+      : mesh_(mesh),
+        topology_(topology),
+        labels_(labels),
+        dual_(dual),
+        cluster_seen_at_(dual.faces.size(), kNone),
+        one_fan_each_(topology.nonmanifold_edges == 0 && topology.nonmanifold_vertices == 0 &&
+                      topology.collapsed_faces == 0) {}
 
   void vertex(uint32_t v) {
     v_ = v;
@@ -263,6 +269,10 @@ class FanWalker {
     degree_ = end - begin;
     if (!dual_.twice_border_edges.empty() && dual_.twice_border_edges[v] == 4) {
       two_runs();
+      return;
+    }
+    if (one_fan_each_ && closed_fan()) {
+      emit();
       return;
     }
     visited_.assign(degree_, 0);
@@ -281,13 +291,16 @@ class FanWalker {
  private:
   const uint32_t* tri(uint32_t f) const { return &mesh_.indices[3 * size_t(f)]; }
   static int corner_of(const uint32_t* t, uint32_t v) { return t[0] == v ? 0 : t[1] == v ? 1 : t[2] == v ? 2 : 3; }
+  // The edge joining corners a != b: edge e joins corners e and e + 1. (Not % 3 of a signed int,
+  // a multiply and shifts.)
+  static int edge_between(int a, int b) { return (a == 2 ? 0 : a + 1) == b ? a : b; }
 
   // The face across the edge {v, x} of face g, or kNone.
   uint32_t across(uint32_t g, uint32_t x) const {
     const uint32_t* t = tri(g);
     int cv = corner_of(t, v_), cx = corner_of(t, x);
     if (cv == 3 || cx == 3 || cv == cx) return kNone;
-    int edge = (cv + 1) % 3 == cx ? cv : cx;  // edge e joins corners e and e+1
+    int edge = edge_between(cv, cx);
     uint32_t h = topology_.face_adjacent[3 * size_t(g) + edge];
     if (h == kNone) return kNone;
     const uint32_t* th = tri(h);
@@ -357,6 +370,31 @@ class FanWalker {
     }
   }
 
+  // Where every vertex has one fan: when the vertex's fan is closed, the runs of what walk() finds
+  // for its first face, the whole fan, without marking faces visited (the marks' searches were half
+  // the walks' time). The walk must come back to that face after exactly degree_ steps. False,
+  // with nothing recorded, when it does not: an open fan (or a topology not built for this mesh),
+  // left to the general walk.
+  bool closed_fan() {
+    const uint32_t f = span_begin_[0];
+    if (degree_ == 0 || f >= labels_.size()) return false;
+    const uint32_t* t = tri(f);
+    const int cv = corner_of(t, v_);
+    if (cv == 3) return false;
+    runs_.clear();
+    uint32_t g = f, exit = t[(cv + 2) % 3];
+    for (uint32_t steps = 1; steps <= degree_; ++steps) {
+      if (runs_.empty() || runs_.back() != labels_[g]) runs_.push_back(labels_[g]);
+      const uint32_t h = across(g, exit);
+      if (h == kNone || (h == f) != (steps == degree_)) return false;
+      exit = third(h, exit);
+      g = h;
+    }
+    if (runs_.size() > 1 && runs_.front() == runs_.back()) runs_.pop_back();  // as runs_from_fan
+    closed_ = true;
+    return true;
+  }
+
   // A vertex with one closed fan and two edges between clusters: two runs of two clusters, which
   // count the vertex once each and make no polygon (what walk, runs_from_fan and emit would find).
   void two_runs() {
@@ -414,6 +452,7 @@ class FanWalker {
   const std::vector<uint32_t>& labels_;
   DualStructure& dual_;
   std::vector<uint32_t> cluster_seen_at_;  // per cluster: the last vertex that counted it
+  const bool one_fan_each_;                // every vertex's faces are one fan, open or closed
   uint32_t v_ = 0, degree_ = 0;
   const uint32_t* span_begin_ = nullptr;
   std::vector<uint8_t> visited_;
