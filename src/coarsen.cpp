@@ -79,10 +79,11 @@ using detail::check_placement_inputs;
 constexpr uint32_t kMaxDynamicProgramming = 128;
 // A triangle whose smallest angle has a sine below this is reported as degenerate.
 constexpr double kDegenerateSine = 1e-9;
-// Faces from which the dual's two halves run on two threads (a thread costs ~50 us to start; the
-// fix loop builds the dual once per defect check: camel -> 500, 19.5k faces, 32 checks, fixes
-// 220-236 -> 203-222 ms with this at 8192 instead of 50000; below it, elephant's 5.5k, no gain).
-constexpr size_t kMinParallelHalves = 8192;
+// Faces from which the dual's two halves run on two threads. A thread costs 15 us to start and
+// join (75 us the first in a process); with the placement in the second half, the fastest of 300
+// bare runs on two threads against one: elephant (5.5k faces) 0.35 against 0.47 ms, femur (7.8k)
+// 0.52 against 0.68, fandisk (12.9k) 0.62 against 0.88, horizons (3.2k) 0.107 against 0.116.
+constexpr size_t kMinParallelHalves = 4096;
 
 // Vertex state: the cluster of all the vertex's (non-collapsed) faces, kSeveral, or kUnset (no face).
 // A vertex inside one cluster needs no fan walk, on the mesh boundary or not: its fans are single
@@ -801,23 +802,35 @@ CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<
   check_placement_inputs(mesh, labels, clusters, face_weights);
   DualStructure dual;
   init_dual(dual, clusters);
-  // Two independent halves: the face and vertex passes of the dual, and the mass centroids. Each
-  // writes its own arrays, so the result is the same whether they run side by side or one after
-  // the other.
+  // Two independent halves of similar cost: the face and vertex passes of the dual; the mass
+  // centroids and, for the placements that need no vertex states (all but closest), the vertex
+  // placement. Each writes its own arrays, so the result is the same whether they run side by side
+  // or one after the other.
   std::vector<double> centroids;
+  std::vector<float> positions;
+  const bool place_beside = options.placement != VertexPlacement::closest;
+  const std::vector<uint32_t> no_vertex_states;
   auto dual_half = [&] {
     count_faces(mesh, topology, labels, dual);
     walk_vertices(mesh, topology, labels, dual);
   };
-  auto other_half = [&] { centroids = detail::mass_centroids(mesh, labels, clusters, face_weights); };
+  auto other_half = [&](unsigned place_threads) {
+    centroids = detail::mass_centroids(mesh, labels, clusters, face_weights);
+    if (place_beside)
+      positions = detail::place_cluster_vertices(mesh, labels, clusters, options.placement, face_weights,
+                                                 no_vertex_states, centroids, place_threads, vertex_faces);
+  };
   if (options.threads == 1 || mesh.face_count() < kMinParallelHalves) {
     dual_half();
-    other_half();
+    other_half(options.threads);
   } else {
+    // The dual's half keeps a core; the placement may spread over the others.
+    const unsigned cores = options.threads == 0 ? std::thread::hardware_concurrency() : options.threads;
+    const unsigned place_threads = std::max(cores, 2u) - 1;
     std::exception_ptr other_error;
     std::thread other([&] {
       try {
-        other_half();
+        other_half(place_threads);
       } catch (...) {
         other_error = std::current_exception();
       }
@@ -831,9 +844,9 @@ CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<
     other.join();
     if (other_error) std::rethrow_exception(other_error);
   }
-  std::vector<float> positions = detail::place_cluster_vertices(mesh, labels, clusters, options.placement,
-                                                                face_weights, dual.vertex_state, centroids,
-                                                                options.threads, vertex_faces);
+  if (!place_beside)
+    positions = detail::place_cluster_vertices(mesh, labels, clusters, options.placement, face_weights,
+                                               dual.vertex_state, centroids, options.threads, vertex_faces);
 
   CoarsenResult result;
   std::vector<uint32_t> chain_offsets;
