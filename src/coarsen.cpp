@@ -37,7 +37,6 @@
 #include <iterator>
 #include <string>
 #include <thread>
-#include <unordered_set>
 #include <vector>
 
 #include "meshcvt/coarsen.h"
@@ -551,7 +550,7 @@ class PolygonTriangulator {
  public:
   // dual_edges: sorted, each once.
   PolygonTriangulator(const std::vector<float>& positions, std::vector<uint64_t> dual_edges)
-      : positions_(positions), dual_edges_(std::move(dual_edges)) {
+      : positions_(positions), dual_edges_(std::move(dual_edges)), first_diagonal_(positions.size() / 3, kNone) {
     assert(std::adjacent_find(dual_edges_.begin(), dual_edges_.end(), std::greater_equal<uint64_t>()) ==
            dual_edges_.end());
   }
@@ -561,6 +560,10 @@ class PolygonTriangulator {
   // Triangulates the polygon q[0..n) (clusters in fan order) into `triangles`. A cluster repeated in
   // the polygon (a pinched cluster) splits it into simple polygons at the repeats first.
   void polygon(const uint32_t* q, size_t n, std::vector<uint32_t>& triangles) {
+    if (n == 3 && q[0] != q[1] && q[1] != q[2] && q[0] != q[2]) {  // most corners: what the rest gives
+      triangles.insert(triangles.end(), {q[0], q[1], q[2]});
+      return;
+    }
     stack_.clear();
     for (size_t i = 0; i < n; ++i) {
       auto it = std::find(stack_.begin(), stack_.end(), q[i]);
@@ -588,7 +591,22 @@ class PolygonTriangulator {
   const float* at(uint32_t cluster) const { return &positions_[3 * size_t(cluster)]; }
   bool existing_edge(uint32_t a, uint32_t b) const {
     uint64_t key = undirected_key(a, b);
-    return std::binary_search(dual_edges_.begin(), dual_edges_.end(), key) || diagonals_.count(key) != 0;
+    return std::binary_search(dual_edges_.begin(), dual_edges_.end(), key) || chosen_diagonal(a, b);
+  }
+
+  // The diagonals chosen so far: per smaller cluster, a list of the larger ones. (A few per
+  // polygon; a hash set's node per key cost more than the lookups.)
+  bool chosen_diagonal(uint32_t a, uint32_t b) const {
+    if (a > b) std::swap(a, b);
+    for (uint32_t d = first_diagonal_[a]; d != kNone; d = diagonals_[d].next)
+      if (diagonals_[d].other == b) return true;
+    return false;
+  }
+  void add_diagonal(uint32_t a, uint32_t b) {
+    if (chosen_diagonal(a, b)) return;
+    if (a > b) std::swap(a, b);
+    diagonals_.push_back({b, first_diagonal_[a]});
+    first_diagonal_[a] = uint32_t(diagonals_.size() - 1);
   }
 
   void simple_polygon(std::vector<uint32_t>& triangles) {
@@ -603,7 +621,7 @@ class PolygonTriangulator {
     if (n > kMaxDynamicProgramming) {
       for (uint32_t k = 1; k + 1 < n; ++k) {
         triangles.insert(triangles.end(), {q[0], q[k], q[k + 1]});
-        if (k >= 2) diagonals_.insert(undirected_key(q[0], q[k]));
+        if (k >= 2) add_diagonal(q[0], q[k]);
       }
       return;
     }
@@ -644,11 +662,11 @@ class PolygonTriangulator {
       uint32_t k = split_[size_t(i) * n + j];
       triangles.insert(triangles.end(), {q[i], q[k], q[j]});
       if (k - i >= 2) {
-        diagonals_.insert(undirected_key(q[i], q[k]));
+        add_diagonal(q[i], q[k]);
         pending_.push_back({i, k});
       }
       if (j - k >= 2) {
-        diagonals_.insert(undirected_key(q[k], q[j]));
+        add_diagonal(q[k], q[j]);
         pending_.push_back({k, j});
       }
     }
@@ -656,7 +674,11 @@ class PolygonTriangulator {
 
   const std::vector<float>& positions_;
   std::vector<uint64_t> dual_edges_;         // sorted: pairs of clusters with a border chain or boundary step
-  std::unordered_set<uint64_t> diagonals_;   // diagonals chosen so far
+  struct Diagonal {
+    uint32_t other, next;  // the larger cluster; the smaller cluster's next diagonal or kNone
+  };
+  std::vector<uint32_t> first_diagonal_;     // per cluster, kNone when none
+  std::vector<Diagonal> diagonals_;
   std::vector<uint32_t> stack_, simple_;
   std::vector<Score> best_;
   std::vector<uint32_t> split_;
