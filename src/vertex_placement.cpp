@@ -54,16 +54,23 @@ void check_placement_inputs(const Mesh& mesh, const std::vector<uint32_t>& label
                             const std::vector<float>* face_weights) {
   size_t faces = mesh.face_count();
   // build_topology rejects such meshes; checked again because every pass indexes with them.
+  // The largest of each first: a loop without an early exit is vectorized (the checks were a
+  // tenth of the dual's time on a small mesh).
   size_t vertices = mesh.vertex_count();
-  for (uint32_t v : mesh.indices)
-    if (v >= vertices) throw OptionError("coarsen: a face has a vertex index out of range");
+  uint32_t largest_index = 0;
+  for (uint32_t v : mesh.indices) largest_index = std::max(largest_index, v);
+  if (!mesh.indices.empty() && largest_index >= vertices)
+    throw OptionError("coarsen: a face has a vertex index out of range");
   if (labels.size() != faces)
     throw OptionError("coarsen: " + std::to_string(labels.size()) + " labels for " + std::to_string(faces) +
                       " faces");
-  for (size_t f = 0; f < faces; ++f)
-    if (labels[f] >= clusters)
-      throw OptionError("coarsen: face " + std::to_string(f) + " has cluster " + std::to_string(labels[f]) +
-                        ", not below the cluster count " + std::to_string(clusters));
+  uint32_t largest_label = 0;
+  for (uint32_t label : labels) largest_label = std::max(largest_label, label);
+  if (faces > 0 && largest_label >= clusters)
+    for (size_t f = 0; f < faces; ++f)
+      if (labels[f] >= clusters)
+        throw OptionError("coarsen: face " + std::to_string(f) + " has cluster " + std::to_string(labels[f]) +
+                          ", not below the cluster count " + std::to_string(clusters));
   if (face_weights && !face_weights->empty()) {
     if (face_weights->size() != faces)
       throw OptionError("coarsen: " + std::to_string(face_weights->size()) + " face weights for " +
