@@ -89,16 +89,19 @@ namespace {
 
 const float* vertex(const Mesh& mesh, uint32_t v) { return &mesh.positions[3 * size_t(v)]; }
 
-// Twice the area vector of face f, in double.
-void face_cross(const Mesh& mesh, size_t f, double n[3]) {
-  const float* a = vertex(mesh, mesh.indices[3 * f]);
-  const float* b = vertex(mesh, mesh.indices[3 * f + 1]);
-  const float* c = vertex(mesh, mesh.indices[3 * f + 2]);
+// Twice the area vector of the triangle (a, b, c), in double.
+inline void face_cross(const float* a, const float* b, const float* c, double n[3]) {
   double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
   double w[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
   n[0] = u[1] * w[2] - u[2] * w[1];
   n[1] = u[2] * w[0] - u[0] * w[2];
   n[2] = u[0] * w[1] - u[1] * w[0];
+}
+
+// Twice the area vector of face f, in double.
+void face_cross(const Mesh& mesh, size_t f, double n[3]) {
+  face_cross(vertex(mesh, mesh.indices[3 * f]), vertex(mesh, mesh.indices[3 * f + 1]),
+             vertex(mesh, mesh.indices[3 * f + 2]), n);
 }
 
 }  // namespace
@@ -110,20 +113,20 @@ namespace detail {
 std::vector<double> mass_centroids(const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t clusters,
                                    const std::vector<float>* face_weights) {
   bool weighted = face_weights && !face_weights->empty();
-  std::vector<double> weighted_sum(4 * size_t(clusters), 0.0);  // x, y, z, weight
-  std::vector<double> plain_sum(4 * size_t(clusters), 0.0);     // x, y, z, count
+  // Per cluster, in one cache line: weighted x, y, z, weight, then plain x, y, z, count.
+  std::vector<double> sums(8 * size_t(clusters), 0.0);
   for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const float* p[3];
+    for (int c = 0; c < 3; ++c) p[c] = vertex(mesh, mesh.indices[3 * f + c]);
     double n[3];
-    face_cross(mesh, f, n);
+    face_cross(p[0], p[1], p[2], n);
     double w = 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     if (weighted) w *= (*face_weights)[f];
     double g[3] = {0, 0, 0};
-    for (int c = 0; c < 3; ++c) {
-      const float* p = vertex(mesh, mesh.indices[3 * f + c]);
-      for (int d = 0; d < 3; ++d) g[d] += p[d];
-    }
-    double* ws = &weighted_sum[4 * size_t(labels[f])];
-    double* ps = &plain_sum[4 * size_t(labels[f])];
+    for (int c = 0; c < 3; ++c)
+      for (int d = 0; d < 3; ++d) g[d] += p[c][d];
+    double* ws = &sums[8 * size_t(labels[f])];
+    double* ps = ws + 4;
     for (int d = 0; d < 3; ++d) {
       ws[d] += w * (g[d] / 3.0);
       ps[d] += g[d] / 3.0;
@@ -133,8 +136,8 @@ std::vector<double> mass_centroids(const Mesh& mesh, const std::vector<uint32_t>
   }
   std::vector<double> centroids(3 * size_t(clusters), 0.0);
   for (size_t i = 0; i < clusters; ++i) {
-    const double* ws = &weighted_sum[4 * i];
-    const double* ps = &plain_sum[4 * i];
+    const double* ws = &sums[8 * i];
+    const double* ps = ws + 4;
     for (int d = 0; d < 3; ++d) {
       if (ws[3] > 0)
         centroids[3 * i + d] = ws[d] / ws[3];
