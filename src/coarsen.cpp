@@ -177,7 +177,7 @@ bool single_closed_fans(const Topology& topology) {
 }
 
 // The root of x's tree in a union-find forest, halving the path on the way.
-uint32_t find_root(std::vector<uint32_t>& parent, uint32_t x) {
+uint32_t find_root(uint32_t* parent, uint32_t x) {
   while (parent[x] != x) {
     parent[x] = parent[parent[x]];
     x = parent[x];
@@ -195,40 +195,53 @@ uint32_t find_root(std::vector<uint32_t>& parent, uint32_t x) {
 // would give, without the flood's walk over the mesh in no useful order (1.1 ms of bunny00's 5).
 void count_faces(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
                  DualStructure& dual) {
-  size_t faces = mesh.face_count();
+  const size_t faces = mesh.face_count();
   std::vector<uint32_t> piece(faces);  // union-find parent per face, a root its own
   dual.vertex_state.assign(mesh.vertex_count(), kUnset);
-  uint32_t* state = dual.vertex_state.data();
   uint8_t* twice_border = nullptr;
   if (single_closed_fans(topology)) {
     dual.twice_border_edges.assign(mesh.vertex_count(), 0);
     twice_border = dual.twice_border_edges.data();
   }
+  // The arrays by local pointers: the byte stores (twice_border, collapsed) may alias anything, so
+  // through the vectors every data pointer was loaded again after each of them.
+  const uint32_t* label_of = labels.data();
+  const uint32_t* corners = mesh.indices.data();
+  const uint32_t* adjacent = topology.face_adjacent.data();
+  uint32_t* state = dual.vertex_state.data();
+  uint32_t* all_faces = dual.all_faces.data();
+  uint32_t* kept_faces = dual.faces.data();
+  uint32_t* components = dual.components.data();
+  uint64_t* border_half_edges = dual.border_half_edges.data();
+  uint32_t* parent = piece.data();
   for (size_t f = 0; f < faces; ++f) {
-    uint32_t label = labels[f];
-    ++dual.all_faces[label];
-    const uint32_t* t = &mesh.indices[3 * f];
+    const uint32_t label = label_of[f];
+    ++all_faces[label];
+    parent[f] = uint32_t(f);
+    const uint32_t* t = corners + 3 * f;
     if (is_collapsed(t)) {
       if (!dual.any_collapsed) dual.collapsed.assign(faces, 0);
       dual.any_collapsed = true;
       dual.collapsed[f] = 1;
       continue;
     }
-    ++dual.faces[label];
-    ++dual.components[label];
-    piece[f] = uint32_t(f);
+    ++kept_faces[label];
+    ++components[label];
+    uint32_t borders = 0;
+    uint32_t mine = uint32_t(f);  // the root of f's piece, kept through its merges
     for (int e = 0; e < 3; ++e) {
-      uint32_t across = topology.face_adjacent[3 * f + e];
+      const uint32_t across = adjacent[3 * f + e];
       if (across != kNone && across >= faces) throw OptionError("coarsen: the topology was not built for this mesh");
-      const bool border = across == kNone || labels[across] != label;
-      dual.border_half_edges[label] += border;
+      const bool border = across == kNone || label_of[across] != label;
       if (!border && across < f) {
-        const uint32_t mine = find_root(piece, uint32_t(f)), theirs = find_root(piece, across);
+        const uint32_t theirs = find_root(parent, across);
         if (mine != theirs) {
-          piece[std::max(mine, theirs)] = std::min(mine, theirs);
-          --dual.components[label];
+          parent[std::max(mine, theirs)] = std::min(mine, theirs);
+          mine = std::min(mine, theirs);
+          --components[label];
         }
       }
+      borders += border;
       if (border && twice_border) {  // both faces of the edge count it: twice per edge
         uint8_t& a = twice_border[t[e]];
         uint8_t& b = twice_border[t[e == 2 ? 0 : e + 1]];
@@ -236,6 +249,7 @@ void count_faces(const Mesh& mesh, const Topology& topology, const std::vector<u
         b = uint8_t(b + (b < 255));
       }
     }
+    border_half_edges[label] += borders;
     for (int c = 0; c < 3; ++c) {
       uint32_t& vertex = state[t[c]];
       if (vertex != label) vertex = vertex == kUnset ? label : kSeveral;
@@ -481,6 +495,11 @@ void init_dual(DualStructure& dual, uint32_t clusters) {
   dual.boundary_ends.assign(clusters, 0);
   dual.components.assign(clusters, 0);
   dual.pinched.assign(clusters, 0);
+  // A disk-like clustering of a closed surface has about 2 corner vertices per cluster (the dual's
+  // triangles), each with 3 runs and 3 chain ends: room for that, not a series of regrowths.
+  dual.polygon_offsets.reserve(2 * size_t(clusters) + 1);
+  dual.polygon_clusters.reserve(6 * size_t(clusters));
+  dual.chain_ends.reserve(6 * size_t(clusters));
 }
 
 // dual.chain_ends sorted.
