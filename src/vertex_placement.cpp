@@ -54,19 +54,19 @@ void check_placement_inputs(const Mesh& mesh, const std::vector<uint32_t>& label
                             const std::vector<float>* face_weights) {
   size_t faces = mesh.face_count();
   // build_topology rejects such meshes; checked again because every pass indexes with them.
-  // The largest of each first: a loop without an early exit is vectorized (the checks were a
-  // tenth of the dual's time on a small mesh).
-  size_t vertices = mesh.vertex_count();
-  uint32_t largest_index = 0;
-  for (uint32_t v : mesh.indices) largest_index = std::max(largest_index, v);
-  if (!mesh.indices.empty() && largest_index >= vertices)
-    throw OptionError("coarsen: a face has a vertex index out of range");
+  // Whether any is out of range first: a loop without an early exit, vectorized, each element a
+  // compare and an or (the checks with a throw inside were 3% of the dual on a small mesh).
+  const size_t vertices = mesh.vertex_count();
+  const uint32_t index_limit = uint32_t(std::min<size_t>(vertices, kNone));  // kNone: no face has it
+  uint32_t bad_index = 0;
+  for (uint32_t v : mesh.indices) bad_index |= v >= index_limit;
+  if (bad_index) throw OptionError("coarsen: a face has a vertex index out of range");
   if (labels.size() != faces)
     throw OptionError("coarsen: " + std::to_string(labels.size()) + " labels for " + std::to_string(faces) +
                       " faces");
-  uint32_t largest_label = 0;
-  for (uint32_t label : labels) largest_label = std::max(largest_label, label);
-  if (faces > 0 && largest_label >= clusters)
+  uint32_t bad_label = 0;
+  for (uint32_t label : labels) bad_label |= label >= clusters;
+  if (bad_label)
     for (size_t f = 0; f < faces; ++f)
       if (labels[f] >= clusters)
         throw OptionError("coarsen: face " + std::to_string(f) + " has cluster " + std::to_string(labels[f]) +
