@@ -29,6 +29,7 @@
 // output is checked for duplicate triangles, edges of three or more triangles, orientation
 // disagreements, input boundary steps without an output edge and degenerate triangles.
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <numbers>
@@ -78,6 +79,8 @@ using detail::check_placement_inputs;
 constexpr uint32_t kMaxDynamicProgramming = 128;
 // A triangle whose smallest angle has a sine below this is reported as degenerate.
 constexpr double kDegenerateSine = 1e-9;
+// Vertices per chunk of the vertex pass (about 50 us of walking).
+constexpr size_t kVertexChunk = 2048;
 // Faces from which the dual's two halves run on two threads. A thread costs 15 us to start and
 // join (75 us the first in a process); with the placement in the second half, the fastest of 300
 // bare runs on two threads against one: elephant (5.5k faces) 0.35 against 0.47 ms, femur (7.8k)
@@ -257,15 +260,18 @@ void count_faces(const Mesh& mesh, const Topology& topology, const std::vector<u
   }
 }
 
-// Walks the fans of one vertex whose faces lie in two or more clusters and records what they give.
+// Walks the fans of one vertex whose faces lie in two or more clusters and records what they give:
+// reads the face pass's results in `faces_pass`, writes the vertex pass's fields of `out`.
 class FanWalker {
  public:
-  FanWalker(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels, DualStructure& dual)
+  FanWalker(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
+            const DualStructure& faces_pass, DualStructure& out)
       : mesh_(mesh),
         topology_(topology),
         labels_(labels),
-        dual_(dual),
-        cluster_seen_at_(dual.faces.size(), kNone),
+        in_(faces_pass),
+        dual_(out),
+        cluster_seen_at_(faces_pass.faces.size(), kNone),
         one_fan_each_(topology.nonmanifold_edges == 0 && topology.nonmanifold_vertices == 0 &&
                       topology.collapsed_faces == 0) {}
 
@@ -276,7 +282,7 @@ class FanWalker {
       throw OptionError("coarsen: the topology was not built for this mesh");
     span_begin_ = topology_.vertex_faces.data() + begin;
     degree_ = end - begin;
-    if (!dual_.twice_border_edges.empty() && dual_.twice_border_edges[v] == 4) {
+    if (!in_.twice_border_edges.empty() && in_.twice_border_edges[v] == 4) {
       two_runs();
       return;
     }
@@ -290,7 +296,7 @@ class FanWalker {
       uint32_t f = span_begin_[s];
       if (f >= labels_.size() || corner_of(tri(f), v_) == 3)
         throw OptionError("coarsen: the topology was not built for this mesh");
-      if (dual_.any_collapsed && dual_.collapsed[f]) continue;  // part of no fan
+      if (in_.any_collapsed && in_.collapsed[f]) continue;  // part of no fan
       walk(f);
       runs_from_fan();
       emit();
@@ -459,6 +465,7 @@ class FanWalker {
   const Mesh& mesh_;
   const Topology& topology_;
   const std::vector<uint32_t>& labels_;
+  const DualStructure& in_;
   DualStructure& dual_;
   std::vector<uint32_t> cluster_seen_at_;  // per cluster: the last vertex that counted it
   const bool one_fan_each_;                // every vertex's faces are one fan, open or closed
@@ -469,22 +476,73 @@ class FanWalker {
   bool closed_ = false;
 };
 
+// The vertex pass in chunks of vertices that the threads of run() take in turn, so the one that
+// finishes its other work first does more of it; the chunks' records are put back in vertex
+// order afterwards (merge_vertex_pass), so the dual does not depend on who walked what.
+struct VertexChunks {
+  struct Record {
+    uint32_t part;                                           // whose output holds it
+    size_t chain_ends, boundary_steps, polygons, clusters;  // that output's sizes after it
+  };
+  explicit VertexChunks(size_t vertices) : count((vertices + kVertexChunk - 1) / kVertexChunk), records(count) {}
+  size_t count;
+  std::atomic<size_t> next{0};
+  std::vector<Record> records;
+};
+
 // Vertices inside one cluster only count for its V; the others (on a cluster border, about a
 // tenth) walk their fans, but for those between two clusters on a mesh of closed fans (most of
 // them: 2.2 -> 1.2 ms of bunny00 -> 500's walk). Vertex order: in most files it follows face
 // order closely enough that the walks' reads of faces, neighbours and labels stay in cache.
+// Takes chunks until none is left; writes the vertex pass's fields of `out` (part `part`).
 void walk_vertices(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
-                   DualStructure& dual) {
-  FanWalker walker(mesh, topology, labels, dual);
-  size_t vertices = mesh.vertex_count();
-  for (size_t v = 0; v < vertices; ++v) {
-    uint32_t state = dual.vertex_state[v];
-    if (state == kUnset) continue;  // unreferenced, or in collapsed faces only
-    if (state != kSeveral)
-      ++dual.vertices[state];
-    else
-      walker.vertex(uint32_t(v));
+                   const DualStructure& faces_pass, DualStructure& out, uint32_t part, VertexChunks& chunks) {
+  FanWalker walker(mesh, topology, labels, faces_pass, out);
+  const size_t vertices = mesh.vertex_count();
+  for (size_t k; (k = chunks.next.fetch_add(1, std::memory_order_relaxed)) < chunks.count;) {
+    for (size_t v = k * kVertexChunk; v < std::min(vertices, (k + 1) * kVertexChunk); ++v) {
+      uint32_t state = faces_pass.vertex_state[v];
+      if (state == kUnset) continue;  // unreferenced, or in collapsed faces only
+      if (state != kSeveral)
+        ++out.vertices[state];
+      else
+        walker.vertex(uint32_t(v));
+    }
+    chunks.records[k] = {part, out.chain_ends.size(), out.boundary_steps.size(), out.polygon_offsets.size() - 1,
+                         out.polygon_clusters.size()};
   }
+}
+
+// Puts the chunks that part 1 walked (into `other`) back in vertex order among part 0's (in dual).
+void merge_vertex_pass(DualStructure& dual, const DualStructure& other, const VertexChunks& chunks) {
+  for (size_t c = 0; c < dual.vertices.size(); ++c) {
+    dual.vertices[c] += other.vertices[c];
+    dual.boundary_ends[c] += other.boundary_ends[c];
+    dual.pinched[c] |= other.pinched[c];
+  }
+  const DualStructure* parts[2] = {&dual, &other};
+  DualStructure merged;
+  merged.polygon_offsets.reserve(dual.polygon_offsets.size() + other.polygon_offsets.size());
+  VertexChunks::Record at[2] = {};  // each part's records up to here
+  for (size_t k = 0; k < chunks.count; ++k) {
+    const VertexChunks::Record& end = chunks.records[k];
+    VertexChunks::Record& begin = at[end.part];
+    const DualStructure& from = *parts[end.part];
+    merged.chain_ends.insert(merged.chain_ends.end(), from.chain_ends.begin() + begin.chain_ends,
+                             from.chain_ends.begin() + end.chain_ends);
+    merged.boundary_steps.insert(merged.boundary_steps.end(), from.boundary_steps.begin() + begin.boundary_steps,
+                                 from.boundary_steps.begin() + end.boundary_steps);
+    const uint32_t shift = uint32_t(merged.polygon_clusters.size() - begin.clusters);
+    for (size_t p = begin.polygons; p < end.polygons; ++p)
+      merged.polygon_offsets.push_back(from.polygon_offsets[p + 1] + shift);
+    merged.polygon_clusters.insert(merged.polygon_clusters.end(), from.polygon_clusters.begin() + begin.clusters,
+                                   from.polygon_clusters.begin() + end.clusters);
+    begin = end;
+  }
+  dual.chain_ends.swap(merged.chain_ends);
+  dual.boundary_steps.swap(merged.boundary_steps);
+  dual.polygon_offsets.swap(merged.polygon_offsets);
+  dual.polygon_clusters.swap(merged.polygon_clusters);
 }
 
 void init_dual(DualStructure& dual, uint32_t clusters) {
@@ -843,18 +901,17 @@ CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<
   check_placement_inputs(mesh, labels, clusters, face_weights);
   DualStructure dual;
   init_dual(dual, clusters);
-  // Two independent halves of similar cost: the face and vertex passes of the dual; the mass
-  // centroids and, for the placements that need no vertex states (all but closest), the vertex
-  // placement. Each writes its own arrays, so the result is the same whether they run side by side
+  // Two halves of similar cost side by side: the face pass of the dual; the mass centroids and, for
+  // the placements that need no vertex states (all but closest), the vertex placement. Then both
+  // take chunks of the vertex pass, which needs the face pass, until none is left: on meshes in no
+  // useful order the face pass's union-find alone outlasts the other half (bunny00: 1.8 against
+  // 1.2 ms). Each writes its own arrays, so the result is the same whether they run side by side
   // or one after the other.
   std::vector<double> centroids;
   std::vector<float> positions;
   const bool place_beside = options.placement != VertexPlacement::closest;
   const std::vector<uint32_t> no_vertex_states;
-  auto dual_half = [&] {
-    count_faces(mesh, topology, labels, dual);
-    walk_vertices(mesh, topology, labels, dual);
-  };
+  VertexChunks chunks(mesh.vertex_count());
   auto other_half = [&](unsigned place_threads) {
     centroids = detail::mass_centroids(mesh, labels, clusters, face_weights);
     if (place_beside)
@@ -862,28 +919,47 @@ CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<
                                                  no_vertex_states, centroids, place_threads, vertex_faces);
   };
   if (options.threads == 1 || mesh.face_count() < kMinParallelHalves) {
-    dual_half();
+    count_faces(mesh, topology, labels, dual);
+    walk_vertices(mesh, topology, labels, dual, dual, 0, chunks);
     other_half(options.threads);
   } else {
     // The dual's half keeps a core; the placement may spread over the others.
     const unsigned cores = options.threads == 0 ? std::thread::hardware_concurrency() : options.threads;
     const unsigned place_threads = std::max(cores, 2u) - 1;
+    DualStructure other_walks;  // the vertex pass's records of the chunks the second thread took
+    other_walks.vertices.assign(clusters, 0);
+    other_walks.boundary_ends.assign(clusters, 0);
+    other_walks.pinched.assign(clusters, 0);
+    std::atomic<int> face_pass{0};  // 1: done, 2: failed
     std::exception_ptr other_error;
     std::thread other([&] {
       try {
         other_half(place_threads);
+        face_pass.wait(0);
+        if (face_pass.load() == 1) walk_vertices(mesh, topology, labels, dual, other_walks, 1, chunks);
       } catch (...) {
         other_error = std::current_exception();
       }
     });
     try {
-      dual_half();
+      try {
+        count_faces(mesh, topology, labels, dual);
+      } catch (...) {
+        face_pass.store(2);
+        face_pass.notify_one();
+        throw;
+      }
+      face_pass.store(1);
+      face_pass.notify_one();
+      walk_vertices(mesh, topology, labels, dual, dual, 0, chunks);
     } catch (...) {
       other.join();
       throw;
     }
     other.join();
     if (other_error) std::rethrow_exception(other_error);
+    if (std::any_of(chunks.records.begin(), chunks.records.end(), [](const auto& r) { return r.part == 1; }))
+      merge_vertex_pass(dual, other_walks, chunks);
   }
   if (!place_beside)
     positions = detail::place_cluster_vertices(mesh, labels, clusters, options.placement, face_weights,
