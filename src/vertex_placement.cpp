@@ -62,9 +62,11 @@ void check_placement_inputs(const Mesh& mesh, const std::vector<uint32_t>& label
   // Whether any is out of range first: a loop without an early exit, vectorized, each element a
   // compare and an or (the checks with a throw inside were 3% of the dual on a small mesh).
   const size_t vertices = mesh.vertex_count();
-  const uint32_t index_limit = uint32_t(std::min<size_t>(vertices, kNone));  // kNone: no face has it
   uint32_t bad_index = 0;
-  for (uint32_t v : mesh.indices) bad_index |= v >= index_limit;
+  if (vertices <= UINT32_MAX) {  // else every index is in range
+    const uint32_t limit = uint32_t(vertices);
+    for (uint32_t v : mesh.indices) bad_index |= v >= limit;
+  }
   if (bad_index) throw OptionError("coarsen: a face has a vertex index out of range");
   if (labels.size() != faces)
     throw OptionError("coarsen: " + std::to_string(labels.size()) + " labels for " + std::to_string(faces) +
