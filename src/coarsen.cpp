@@ -19,8 +19,9 @@
 // Nothing here needs maps per vertex: one pass over faces in face order (cluster face and border
 // counts, connectivity by union-find, and per vertex the one cluster of its faces, if one), one over
 // vertices where only those on a cluster border or the mesh boundary (about a tenth) walk their fan
-// through the CSR vertex->faces arrays; the mass centroids run beside the two on a second thread.
-// The few records per corner vertex are sorted afterwards, by a counting sort on cluster ids.
+// through the CSR vertex->faces arrays. On a second thread the mass centroids and the vertex
+// placement run beside the face pass, and the two threads share the vertex pass (see run). The few
+// records per corner vertex are sorted afterwards, by a counting sort on cluster ids.
 //
 // Defects (see DualDefect) are found from counts a disk cluster must have: it is edge-connected and
 // V - E + F = 1 where E = (3F + B) / 2 with B its border half-edges (a connected surface with
