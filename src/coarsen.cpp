@@ -271,7 +271,7 @@ class FanWalker {
         topology_(topology),
         labels_(labels),
         in_(faces_pass),
-        dual_(out),
+        out_(out),
         cluster_seen_at_(faces_pass.faces.size(), kNone),
         one_fan_each_(topology.nonmanifold_edges == 0 && topology.nonmanifold_vertices == 0 &&
                       topology.collapsed_faces == 0) {}
@@ -425,8 +425,8 @@ class FanWalker {
       if (labels_[f] != a) b = labels_[f];
     }
     if (b == a) throw OptionError("coarsen: the topology was not built for this mesh");
-    ++dual_.vertices[a];
-    ++dual_.vertices[b];
+    ++out_.vertices[a];
+    ++out_.vertices[b];
   }
 
   void runs_from_fan() {
@@ -440,34 +440,34 @@ class FanWalker {
     size_t n = runs_.size();
     for (uint32_t c : runs_) {
       if (cluster_seen_at_[c] == v_) {
-        dual_.pinched[c] = 1;  // the cluster's faces around v are not one wedge
+        out_.pinched[c] = 1;  // the cluster's faces around v are not one wedge
       } else {
         cluster_seen_at_[c] = v_;
-        ++dual_.vertices[c];
+        ++out_.vertices[c];
       }
     }
     if (closed_) {
       if (n < 3) return;  // inside a cluster, or in the middle of a border chain
-      for (size_t i = 0; i < n; ++i) dual_.chain_ends.push_back(undirected_key(runs_[i], runs_[(i + 1) % n]));
+      for (size_t i = 0; i < n; ++i) out_.chain_ends.push_back(undirected_key(runs_[i], runs_[(i + 1) % n]));
     } else {
-      for (size_t i = 0; i + 1 < n; ++i) dual_.chain_ends.push_back(undirected_key(runs_[i], runs_[i + 1]));
+      for (size_t i = 0; i + 1 < n; ++i) out_.chain_ends.push_back(undirected_key(runs_[i], runs_[i + 1]));
       if (n >= 2 && runs_.front() != runs_.back()) {
         // The boundary enters v along the last face's edge and leaves along the first face's.
-        dual_.boundary_steps.push_back(directed_key(runs_.back(), runs_.front()));
-        ++dual_.boundary_ends[runs_.back()];
-        ++dual_.boundary_ends[runs_.front()];
+        out_.boundary_steps.push_back(directed_key(runs_.back(), runs_.front()));
+        ++out_.boundary_ends[runs_.back()];
+        ++out_.boundary_ends[runs_.front()];
       }
       if (n < 3) return;
     }
-    dual_.polygon_clusters.insert(dual_.polygon_clusters.end(), runs_.begin(), runs_.end());
-    dual_.polygon_offsets.push_back(uint32_t(dual_.polygon_clusters.size()));
+    out_.polygon_clusters.insert(out_.polygon_clusters.end(), runs_.begin(), runs_.end());
+    out_.polygon_offsets.push_back(uint32_t(out_.polygon_clusters.size()));
   }
 
   const Mesh& mesh_;
   const Topology& topology_;
   const std::vector<uint32_t>& labels_;
   const DualStructure& in_;
-  DualStructure& dual_;
+  DualStructure& out_;
   std::vector<uint32_t> cluster_seen_at_;  // per cluster: the last vertex that counted it
   const bool one_fan_each_;                // every vertex's faces are one fan, open or closed
   uint32_t v_ = 0, degree_ = 0;
