@@ -805,8 +805,9 @@ TEST_CASE("coarsen: projected placement lies on the surface, closest to the cent
 }
 
 TEST_CASE("coarsen: the result does not depend on the thread count") {
-  // 72200 faces: large enough for the parallel paths (the dual's two halves from 8192 faces, the
-  // projected placement's split scan from 65536). Blocks of 10 x 10 quads, one annulus.
+  // 72200 faces: large enough for the parallel paths (the dual's two halves and their shared vertex
+  // pass from 4096 faces, the projected placement's split scan from 65536). Blocks of 10 x 10
+  // quads, one annulus.
   Labeled g = grid(190, 190, [](int i, int j) {
     int bi = i / 10, bj = j / 10;
     if (std::max(std::abs(bi - 8), std::abs(bj - 8)) == 1) return 0u;  // a ring of 8 blocks

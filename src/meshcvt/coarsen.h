@@ -51,8 +51,9 @@ struct CoarsenOptions {
   /// refined_elephant, a 131k sphere and the 1.2M/4.8M bunny its smallest angle is 2.6-11 degrees
   /// larger than `closest`'s, Q avg higher on every mesh, RMS error equal or lower, Hausdorff within 6%.
   VertexPlacement placement = VertexPlacement::projected;
-  /// 1: everything on the calling thread. Otherwise two independent passes run side by side on
-  /// meshes of 50k faces or more (0: every core). The result does not depend on it.
+  /// 1: everything on the calling thread. Otherwise two independent halves of the work run side by
+  /// side on meshes of 4096 faces or more, the vertex placement spread over the remaining cores on
+  /// large meshes (0: every core). The result does not depend on it.
   unsigned threads = 0;
   /// After building the dual: flip the shared edge of two adjacent, nearly coplanar triangles (normals
   /// within `flip_max_dihedral_deg`) whenever that raises the smaller of their minimum angles (see
