@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# CLI test of `meshcvt coarsen --vertex qem` and its fitting options, on the elephant (chi -4):
+# - the default fits the coarse mesh (vertex moves and edge swaps, counted in the JSON report) and
+#   the written file is a closed, consistently oriented manifold with the input's chi and exactly n
+#   vertices, checked here in Python from the file;
+# - --no-fit-swaps moves vertices only (swapped_edges 0) and its RMS distance is higher than the
+#   default's; --fit-passes 0 does neither and is higher still;
+# - a bad --fit-passes exits 2 and writes nothing.
+# usage: coarsen_qem.sh /path/to/meshcvt /path/to/tests/data
+set -euo pipefail
+cli=$1
+data=$2
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+run() {  # run NAME [options...]
+  local name=$1
+  shift
+  "$cli" coarsen "$data/elephant.off" -n 300 --vertex qem -o "$tmp/$name.off" --report "$tmp/$name.json" -q "$@" \
+    || fail "coarsen $* failed"
+}
+run swaps
+run moves --no-fit-swaps
+run none --fit-passes 0
+
+python3 - "$tmp" <<'PY' || fail "report or output check failed"
+import json, sys
+tmp = sys.argv[1]
+r = {k: json.load(open(f"{tmp}/{k}.json")) for k in ("swaps", "moves", "none")}
+assert r["swaps"]["fit_swaps"] is True and r["moves"]["fit_swaps"] is False, "fit_swaps not reported"
+assert r["swaps"]["swapped_edges"] > 0 and r["swaps"]["fitted_moves"] > 0, r["swaps"]
+assert r["moves"]["swapped_edges"] == 0 and r["moves"]["fitted_moves"] > 0, r["moves"]
+assert r["none"]["swapped_edges"] == 0 and r["none"]["fitted_moves"] == 0, r["none"]
+rms = {k: v["error"]["rms"] for k, v in r.items()}
+assert rms["swaps"] < rms["moves"] < rms["none"], rms
+
+# The written default output, read back: OFF, triangles only.
+lines = [l.split() for l in open(f"{tmp}/swaps.off") if l.strip() and not l.startswith("#")]
+assert lines[0] == ["OFF"], lines[0]
+nv, nf = int(lines[1][0]), int(lines[1][1])
+faces = [tuple(map(int, l[1:4])) for l in lines[2 + nv:2 + nv + nf]]
+assert nv == 300, nv
+directed = set()
+for a, b, c in faces:
+    assert len({a, b, c}) == 3, (a, b, c)
+    for e in ((a, b), (b, c), (c, a)):
+        assert e not in directed, f"directed edge {e} twice: orientation or manifold broken"
+        directed.add(e)
+assert all((b, a) in directed for a, b in directed), "an edge with one triangle: not closed"
+edges = len(directed) // 2
+used = len({v for f in faces for v in f})
+assert used == 300, used
+assert used - edges + nf == -4, used - edges + nf
+PY
+
+if "$cli" coarsen "$data/elephant.off" -n 300 --vertex qem --fit-passes -1 -o "$tmp/bad.off" 2>"$tmp/err"; then
+  fail "--fit-passes -1 accepted"
+fi
+[ ! -e "$tmp/bad.off" ] || fail "--fit-passes -1 wrote a file"
+echo ok
