@@ -862,12 +862,16 @@ uint64_t check_edges(const std::vector<uint32_t>& triangles, uint32_t clusters,
       defects.push_back({DualDefect::inconsistent_orientation, a, b, kNone});
     i = j;
   }
+  // Each step of an input boundary loop needs an output edge of exactly one triangle. An edge of
+  // two is a loop closed over: two clusters alone along a hole (A -> B -> A) give the steps of both
+  // directions one edge, which both their triangles share, and the hole disappears.
   for (uint64_t step : boundary_steps) {
     uint32_t from = key_high(step), to = key_low(step);
     const uint64_t key = undirected_key(from, to);
     auto end = edges.begin() + offsets[key_high(key) + 1];
     auto it = std::lower_bound(edges.begin() + offsets[key_high(key)], end, key << 1);
-    if (it == end || *it >> 1 != key) defects.push_back({DualDefect::missing_boundary_edge, from, to, kNone});
+    if (it == end || *it >> 1 != key || (it + 1 != end && it[1] >> 1 == key))
+      defects.push_back({DualDefect::missing_boundary_edge, from, to, kNone});
   }
   return boundary;
 }

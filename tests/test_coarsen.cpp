@@ -536,6 +536,53 @@ TEST_CASE("coarsen: a cluster meeting the boundary in two arcs is reported") {
   CHECK(has_defect(r.defects, DualDefect::missing_boundary_edge, 0, 1));
 }
 
+TEST_CASE("coarsen: a hole along the border of only two clusters is reported, and fixed by the whole job") {
+  // The four-cluster sphere with one face of cluster 0 taken out at a corner where clusters 0, 2
+  // and 3 meet, along the border of 0 and 2: the hole's corners are that corner, a vertex of the
+  // 0|2 border and one inside 0. Every cluster stays a disk meeting the boundary at most once and
+  // the 0|2 border stays one chain, yet along the hole the open fans end in clusters 0 and 2 alone
+  // (3 is inside the corner's fan): the output would close over the hole, 0-2 an edge of two
+  // triangles instead of one. Found by the first version of the check, on ChineseDragon -> 300,
+  // whose fix loop left such a hole and a chi of 1 instead of 0.
+  Labeled o = sphere_four_clusters(3);
+  const Topology before = build_topology(o.mesh);
+  auto clusters_at = [&](uint32_t v) {
+    std::set<uint32_t> c;
+    for (uint32_t i = before.vertex_face_offsets[v]; i < before.vertex_face_offsets[v + 1]; ++i)
+      c.insert(o.labels[before.vertex_faces[i]]);
+    return c;
+  };
+  size_t hole = SIZE_MAX;
+  for (size_t f = 0; f < o.mesh.face_count() && hole == SIZE_MAX; ++f) {
+    if (o.labels[f] != 0) continue;
+    int corner = 0, border = 0, inside = 0;
+    for (int k = 0; k < 3; ++k) {
+      const std::set<uint32_t> c = clusters_at(o.mesh.indices[3 * f + k]);
+      corner += c == std::set<uint32_t>{0, 2, 3};
+      border += c == std::set<uint32_t>{0, 2};
+      inside += c == std::set<uint32_t>{0};
+    }
+    if (corner == 1 && border == 1 && inside == 1) hole = f;
+  }
+  REQUIRE(hole != SIZE_MAX);
+  o.mesh.indices.erase(o.mesh.indices.begin() + 3 * hole, o.mesh.indices.begin() + 3 * hole + 3);
+  o.labels.erase(o.labels.begin() + hole);
+  CoarsenResult r = coarsen(o, 4);
+  CHECK((has_defect(r.defects, DualDefect::missing_boundary_edge, 0, 2) ||
+         has_defect(r.defects, DualDefect::missing_boundary_edge, 2, 0)));
+  for (const DualDefect& d : r.defects) CHECK(d.kind == DualDefect::missing_boundary_edge);
+  // The whole job fixes the clustering: the output keeps the hole and the input's chi (1).
+  const Topology topology = build_topology(o.mesh);
+  REQUIRE(topology.boundary_loops == 1);
+  CoarsenMeshOptions job;
+  job.cluster.clusters = 12;
+  CoarsenMeshResult fixed = coarsen_mesh(o.mesh, topology, job);
+  CHECK(!fixed.defects_remain);
+  Surface s = inspect(fixed.coarse.mesh);
+  CHECK(s.boundary_loops == 1);
+  CHECK(s.chi() == 1);
+}
+
 TEST_CASE("coarsen: three clusters on a sphere give two opposite triangles, reported") {
   // Octahedron faces by octant: x > 0 is A; x < 0 split by y into B and C.
   Labeled s = sphere_four_clusters(2);

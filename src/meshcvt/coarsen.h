@@ -110,9 +110,10 @@ struct DualDefect {
     /// The coarse edge (cluster, other) is used twice in the same direction: the two triangles
     /// disagree on orientation.
     inconsistent_orientation,
-    /// The input boundary passes from `cluster` to `other` (in that order along the loop) but no
-    /// triangle has the edge between them: their border runs from boundary to boundary, so the
-    /// output boundary cannot follow the input loop there.
+    /// The input boundary passes from `cluster` to `other` (in that order along the loop) but the
+    /// edge between them is not an edge of exactly one triangle: none has it (their border runs
+    /// from boundary to boundary), or two do (the two clusters alone along a hole, which the
+    /// output closes over). Either way the output boundary cannot follow the input loop there.
     missing_boundary_edge,
     /// The triangle (cluster, other, third), in output order, has (almost) zero area: its vertices
     /// coincide or are collinear (sine of its smallest angle below 1e-9).
