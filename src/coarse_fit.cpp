@@ -1,7 +1,7 @@
 // meshcvt: fits a coarse mesh to the input surface it stands for, the distance minimization of
 // mesh optimization (Hoppe, DeRose, Duchamp, McDonald, Stuetzle, SIGGRAPH 1993: E_dist over the
 // vertex positions and over edge swaps, the vertex count fixed). Used after the `qem` placement
-// (declared in coarsen.cpp's detail block).
+// (declared in coarse_fit.h).
 //
 // Why move the vertices: a quadric point minimizes the squared distances to the planes of its
 // cluster's faces, so it sits on the surface where the cluster is flat and just outside it where
@@ -35,7 +35,7 @@
 //     already; u and v keep three edges; both new triangles face the side of the old ones), and
 //     the smaller smallest angle of the pair does not drop below min(its old value, kSwapAngleFloor).
 //     Swaps are tested one after the other in a fixed order, so the result is deterministic; after
-//     the first round only edges with a vertex touched since are tested again.
+//     the first pass over the edges only edges with a vertex touched since are tested again.
 // Connectivity changes only through swaps: the vertex count, the boundary and the orientation stay.
 #include <algorithm>
 #include <cmath>

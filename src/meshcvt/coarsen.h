@@ -38,11 +38,13 @@ enum class VertexPlacement {
   /// part of it passes nearer. Exact point-triangle distances, one per face, O(F).
   projected,
   /// The point minimizing the sum of w_k * squared distance to the planes of the cluster's faces
-  /// (Garland-Heckbert quadrics), plus a tenth of the planes of the other clusters' faces around
-  /// its border vertices (a crease along the border then pulls the point onto it). Directions the
+  /// (Garland-Heckbert quadrics), plus 0.3 / 3 of the planes of the other clusters' faces at each
+  /// of its border vertices (a crease along the border then pulls the point onto it). Directions the
   /// quadric does not constrain (eigenvalues below 1e-3 of the largest) are left at c_i, so a flat
   /// cluster gives c_i and a corner gives the corner. Clamped toward c_i so it stays inside the
-  /// cluster's bounding box grown by 10% of its diagonal. Then CoarsenOptions::fit_passes.
+  /// cluster's bounding box grown by 10% of its diagonal. A point within 1% of that diagonal of
+  /// another cluster's, or a corner of a flat dual triangle, keeps its own planes only. Then
+  /// CoarsenOptions::fit_passes.
   qem,
 };
 
