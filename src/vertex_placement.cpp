@@ -488,40 +488,43 @@ std::vector<float> place_qem(const Mesh& mesh, const Topology* topology, const s
   // Each cluster's point with the lent planes; where two clusters' points nearly meet (two
   // clusters at a corner of the surface both pulled onto it), the later cluster keeps the point of
   // its own planes: coincident vertices would give the dual degenerate triangles.
-  std::vector<double> points(3 * size_t(clusters), 0.0), own(3 * size_t(clusters), 0.0), reach(clusters, -1.0);
-  std::vector<uint32_t> order;
+  std::vector<double> points(3 * size_t(clusters), 0.0), reach(clusters, -1.0);
+  std::vector<uint32_t> order;  // the clusters with faces
+  auto solve = [&](uint32_t i, bool with_lent) {
+    double c[3], q[9];
+    for (int d = 0; d < 3; ++d) c[d] = centroids[3 * size_t(i) + d] - origin[d];
+    for (int k = 0; k < 9; ++k) q[k] = quadric[9 * size_t(i) + k] + (with_lent ? lent[9 * size_t(i) + k] : 0.0);
+    solve_quadric(q, &box[6 * size_t(i)], c, &points[3 * size_t(i)]);
+  };
   for (uint32_t i = 0; i < clusters; ++i) {
     const double* bb = &box[6 * size_t(i)];
     if (!(bb[0] <= bb[3])) continue;  // empty cluster
-    double c[3], with_lent[9];
-    for (int d = 0; d < 3; ++d) c[d] = centroids[3 * size_t(i) + d] - origin[d];
-    solve_quadric(&quadric[9 * size_t(i)], bb, c, &own[3 * size_t(i)]);
-    for (int k = 0; k < 9; ++k) with_lent[k] = quadric[9 * size_t(i) + k] + lent[9 * size_t(i) + k];
-    solve_quadric(with_lent, bb, c, &points[3 * size_t(i)]);
+    solve(i, true);
     reach[i] = kDistinctPoints * std::sqrt((bb[3] - bb[0]) * (bb[3] - bb[0]) + (bb[4] - bb[1]) * (bb[4] - bb[1]) +
                                            (bb[5] - bb[2]) * (bb[5] - bb[2]));
     order.push_back(i);
   }
   if (topology && kBorderPlaneShare > 0) {
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    std::vector<uint8_t> keeps_own(clusters, 0);
+    if (own_planes_only) keeps_own = *own_planes_only;
+    std::vector<uint32_t> by_x = order;
+    std::sort(by_x.begin(), by_x.end(), [&](uint32_t a, uint32_t b) {
       return points[3 * size_t(a)] != points[3 * size_t(b)] ? points[3 * size_t(a)] < points[3 * size_t(b)] : a < b;
     });
-    const double widest = order.empty() ? 0 : *std::max_element(reach.begin(), reach.end());
-    std::vector<uint8_t> keeps_own(clusters, 0);
-    for (size_t k = 0; k < order.size(); ++k) {
-      const uint32_t i = order[k];
+    const double widest = by_x.empty() ? 0 : *std::max_element(reach.begin(), reach.end());
+    for (size_t k = 0; k < by_x.size(); ++k) {
+      const uint32_t i = by_x[k];
       const double* p = &points[3 * size_t(i)];
-      for (size_t m = k + 1; m < order.size() && points[3 * size_t(order[m])] - p[0] <= widest; ++m) {
-        const uint32_t j = order[m];
+      for (size_t m = k + 1; m < by_x.size() && points[3 * size_t(by_x[m])] - p[0] <= widest; ++m) {
+        const uint32_t j = by_x[m];
         const double* q = &points[3 * size_t(j)];
         const double gap2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
         const double close = std::min(reach[i], reach[j]);
         if (gap2 <= close * close) keeps_own[std::max(i, j)] = 1;
       }
     }
-    for (uint32_t i = 0; i < clusters; ++i)
-      if (keeps_own[i] || (own_planes_only && (*own_planes_only)[i]))
-        for (int d = 0; d < 3; ++d) points[3 * size_t(i) + d] = own[3 * size_t(i) + d];
+    for (uint32_t i : order)
+      if (keeps_own[i]) solve(i, false);
   }
   std::vector<float> positions(3 * size_t(clusters), 0.0f);
   for (uint32_t i : order)
