@@ -318,7 +318,7 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
     if (!(dot(cross(pu - pc, pd - pc), side) > 0) || !(dot(cross(pv - pd, pc - pd), side) > 0)) return false;
     const double before = std::min(smallest_angle(pu, pv, pc), smallest_angle(pv, pu, pd));
     const double after = std::min(smallest_angle(pc, pu, pd), smallest_angle(pd, pv, pc));
-    if (after < std::min(before, angle_floor)) return false;
+    if (after < std::min(before, angle_floor) || edges.joined(tri, c, d)) return false;
     // The pair's samples against the two triangles of the other diagonal; given up as soon as
     // the new sum cannot reach the required gain.
     pair.assign(owned[t1].begin(), owned[t1].end());
@@ -337,7 +337,7 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
       to_second[i] = closest_point_on_triangle(s.x, a2[0], a2[1], a2[2], point);
       new_error += s.weight * std::min(to_first[i], to_second[i]);
     }
-    if (!(new_error < limit) || edges.joined(tri, c, d)) return false;
+    if (!(new_error < limit)) return false;
     // Swap: t1 = (c, u, d), t2 = (d, v, c); the four outer half-edges keep their twins.
     std::vector<uint32_t>& twin = edges.twin;
     const uint32_t outer_cu = twin[HalfEdges::prev(h)], outer_vc = twin[HalfEdges::next(h)],

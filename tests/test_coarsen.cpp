@@ -571,7 +571,7 @@ TEST_CASE("coarsen: a hole along the border of only two clusters is reported, an
   CHECK((has_defect(r.defects, DualDefect::missing_boundary_edge, 0, 2) ||
          has_defect(r.defects, DualDefect::missing_boundary_edge, 2, 0)));
   for (const DualDefect& d : r.defects) CHECK(d.kind == DualDefect::missing_boundary_edge);
-  // The whole job fixes the clustering: the output keeps the hole and the input's chi (1).
+  // The whole job on this mesh (its own clustering, fixed where needed) keeps the hole and chi 1.
   const Topology topology = build_topology(o.mesh);
   REQUIRE(topology.boundary_loops == 1);
   CoarsenMeshOptions job;
