@@ -7,7 +7,10 @@
 # into bench/data/ (git-ignored, never committed).
 # usage: bench/gpu_bench.sh [--quick]   (--quick: skip the 4.8M-face mesh)
 #        environment: MESHCVT_BENCH_CLUSTERS (default 10000), MESHCVT_BENCH_DEVICE (default gpu),
-#        MESHCVT_BENCH_BIN (a meshcvt binary already built in release; skips the build)
+#        MESHCVT_BENCH_BIN (a meshcvt binary already built in release; skips the build),
+#        MESHCVT_BENCH_PEAK_GBPS (the device's peak memory bandwidth in GB/s: also runs
+#        gpu_kernel_bench on each mesh, the boundary kernel's GPU time and its share of that peak),
+#        MESHCVT_BENCH_KERNEL_BIN (gpu_kernel_bench already built; default: built beside meshcvt)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 quick=0
@@ -18,9 +21,10 @@ gpu=${MESHCVT_BENCH_DEVICE:-gpu}
 meshcvt=${MESHCVT_BENCH_BIN:-}
 if [ -z "$meshcvt" ]; then
   cmake -S . -B build-gpu-bench -G Ninja -DCMAKE_BUILD_TYPE=Release -DMESHCVT_TESTS=OFF >/dev/null
-  cmake --build build-gpu-bench --target meshcvt_cli >/dev/null
+  cmake --build build-gpu-bench --target meshcvt_cli gpu_kernel_bench >/dev/null
   meshcvt=build-gpu-bench/meshcvt
 fi
+kernel_bench=${MESHCVT_BENCH_KERNEL_BIN:-$(dirname "$meshcvt")/bench/gpu_kernel_bench}
 
 data=bench/data
 mkdir -p "$data"
@@ -62,4 +66,10 @@ print(f'{sys.argv[2]:<16} {sys.argv[3]:<7} {r["faces"]:>10} {r["iterations"]:>6}
 PY
   done
   if cmp -s "$work/labels-cpu.txt" "$work/labels-$gpu.txt"; then echo "  labels identical"; else echo "  LABELS DIFFER"; fi
+  if [ -n "${MESHCVT_BENCH_PEAK_GBPS:-}" ]; then
+    device_index=
+    case "$gpu" in gpu:*) device_index=${gpu#gpu:} ;; esac
+    # shellcheck disable=SC2086
+    "$kernel_bench" "$mesh" "$clusters" "$MESHCVT_BENCH_PEAK_GBPS" $device_index || echo "  KERNEL BENCH FAILED"
+  fi
 done

@@ -182,6 +182,11 @@ class GpuIteration final : public IterationEngine {
   const std::vector<uint32_t>& labels() const override;
   const std::vector<float>& generators() const override { return generators_; }
   std::string description() const override { return context_->info().name + " (Vulkan)"; }
+  bool start_kernel_timing() override {
+    timing_ = true;
+    return true;
+  }
+  KernelTimes kernel_times() const override { return kernel_times_; }
 
  private:
   void upload_generators();
@@ -207,6 +212,8 @@ class GpuIteration final : public IterationEngine {
   std::vector<uint32_t> changed_;         // clusters changed by the last iteration (their flags are set on the GPU)
   std::vector<int64_t> changed_sums_host_;
   bool all_generators_stale_ = true;      // upload every generator (after reset)
+  bool timing_ = false;                   // timestamps around the kernels (benchmarks)
+  KernelTimes kernel_times_;
 };
 
 GpuIteration::GpuIteration(const ClusterProblem& problem, const Mesh& mesh, const Topology& topology,
@@ -319,14 +326,21 @@ IterationRecord GpuIteration::step() {
 
   // 1. boundary test; then the last iteration's changed flags are cleared (the test read them)
   seq.fill(counters_, 0).barrier();
+  const uint32_t boundary_begin = timing_ ? seq.timestamp() : 0;
   seq.dispatch_1d(*lease_.kit->boundary, face_count_, push(flags, 0)).barrier();
+  const uint32_t boundary_end = timing_ ? seq.timestamp() : 0;
   if (!changed_.empty()) seq.dispatch_1d(*lease_.kit->flags, changed_.size(), push(kFlagClear, uint32_t(changed_.size())));
   seq.barrier().copy(counters_, readback_, counters_.size()).run();
+  if (timing_) {
+    kernel_times_.boundary_s += seq.timestamp_seconds(boundary_begin, boundary_end);
+    ++kernel_times_.boundary_dispatches;
+  }
   const uint32_t proposals = counters[kProposals];
   record.evaluated_faces = counters[kEvaluated];
   changed_.clear();
   if (proposals > 0) {
     // 2. disk filter, apply, gather the changed clusters' sums
+    const uint32_t update_begin = timing_ ? seq.timestamp() : 0;
     if (mode_ == TopologyMode::preserving) {
       seq.dispatch_1d(*disk_, proposals, push(flags, proposals)).barrier();
       seq.dispatch_1d(*lease_.kit->rank, proposals, push(flags, proposals)).barrier();
@@ -335,7 +349,9 @@ IterationRecord GpuIteration::step() {
     seq.dispatch_1d(*lease_.kit->apply, proposals, push(apply_flags, proposals)).barrier();
     const uint64_t most_changed = std::min<uint64_t>(cluster_count_, 2ull * proposals);
     seq.dispatch_1d(*lease_.kit->flags, most_changed, push(0, 0)).barrier();
+    const uint32_t update_end = timing_ ? seq.timestamp() : 0;
     seq.copy(counters_, readback_, counters_.size()).run();
+    if (timing_) kernel_times_.update_s += seq.timestamp_seconds(update_begin, update_end);
     if (counters[kOverflow] != 0)
       throw DeviceError("gpu engine: a vertex ring exceeded the disk kernel's member array (internal error)");
     record.moves = counters[kMoves];

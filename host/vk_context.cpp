@@ -339,6 +339,13 @@ Context::Context(uint32_t device_index, const ContextOptions& options)
     throw DeviceError("gpu:" + std::to_string(device_index) + " " + info_.name + " cannot run meshcvt: it lacks " +
                       info_.missing_features);
   queue_family_ = compute_queue_family(physical_);
+  {
+    uint32_t count = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(physical_, &count, nullptr);
+    std::vector<VkQueueFamilyProperties> families(count);
+    vkGetPhysicalDeviceQueueFamilyProperties(physical_, &count, families.data());
+    timestamp_valid_bits_ = families[queue_family_].timestampValidBits;
+  }
 
   VkPhysicalDeviceMaintenance3Properties maintenance3{};
   maintenance3.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES;

@@ -110,6 +110,8 @@ class Context {
   uint32_t queue_family() const { return queue_family_; }
   const DeviceInfo& info() const { return info_; }
   const VkPhysicalDeviceLimits& limits() const { return limits_; }
+  /// The compute queue's timestampValidBits (0: no timestamps).
+  uint32_t timestamp_valid_bits() const { return timestamp_valid_bits_; }
   bool validation() const { return instance_.validation(); }
   bool has_float64() const { return has_float64_; }
   /// The wait limit in nanoseconds.
@@ -149,6 +151,7 @@ class Context {
   VolkDeviceTable table_{};
   VkQueue queue_ = VK_NULL_HANDLE;
   uint32_t queue_family_ = 0;
+  uint32_t timestamp_valid_bits_ = 0;
   DeviceInfo info_;
   VkPhysicalDeviceLimits limits_{};
   VkPhysicalDeviceMemoryProperties memory_{};

@@ -21,6 +21,9 @@ constexpr VkAccessFlags kReadsAndWrites =
 // After a failure the destructor waits this long at most for work still running, then leaks it.
 constexpr uint64_t kGraceNs = 2'000'000'000;
 
+// Timestamps one recording may hold.
+constexpr uint32_t kMaxTimestamps = 256;
+
 void memory_barrier(const VolkDeviceTable& vk, VkCommandBuffer commands, VkPipelineStageFlags dst_stages,
                     VkAccessFlags dst_access) {
   VkMemoryBarrier barrier{};
@@ -80,6 +83,7 @@ Sequence::~Sequence() {
     context_.note_completed();  // finished, or the device is lost and it never will
   }
   for (VkEvent event : events_) vk.vkDestroyEvent(device, event, nullptr);
+  if (timestamps_pool_) vk.vkDestroyQueryPool(device, timestamps_pool_, nullptr);
   vk.vkDestroyFence(device, fence_, nullptr);
   vk.vkDestroyCommandPool(device, pool_, nullptr);
 }
@@ -93,6 +97,8 @@ void Sequence::begin() {
   // The previous submission has completed (wait() ran), so its markers can be reset from the host.
   for (uint32_t i = 0; i < markers_; ++i) check(vk.vkResetEvent(context_.device(), events_[i]), "vkResetEvent");
   markers_ = 0;
+  timestamps_ = 0;
+  timestamp_values_.clear();  // they belonged to the submission before this recording
   dispatches_ = 0;
   VkCommandBufferBeginInfo info{};
   info.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO;
@@ -191,6 +197,36 @@ bool Sequence::reached(uint32_t marker) const {
   throw_result(result, "vkGetEventStatus");
 }
 
+uint32_t Sequence::timestamp() {
+  begin();
+  const auto& vk = context_.vk();
+  if (!timestamps_pool_) {
+    if (context_.timestamp_valid_bits() == 0)
+      throw DeviceError(context_.info().name + ": its compute queue has no timestamps (timestampValidBits 0)");
+    VkQueryPoolCreateInfo info{};
+    info.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO;
+    info.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    info.queryCount = kMaxTimestamps;
+    check(vk.vkCreateQueryPool(context_.device(), &info, nullptr, &timestamps_pool_), "vkCreateQueryPool");
+  }
+  if (timestamps_ == kMaxTimestamps)
+    throw std::out_of_range("meshcvt::vk::Sequence: more than " + std::to_string(kMaxTimestamps) +
+                            " timestamps in one recording");
+  // Queries must be reset before they are written; each is reset in the recording that writes it.
+  vk.vkCmdResetQueryPool(commands_, timestamps_pool_, timestamps_, 1);
+  vk.vkCmdWriteTimestamp(commands_, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps_pool_, timestamps_);
+  return timestamps_++;
+}
+
+double Sequence::timestamp_seconds(uint32_t from, uint32_t to) const {
+  if (from >= timestamp_values_.size() || to >= timestamp_values_.size())
+    throw std::out_of_range("meshcvt::vk::Sequence: no such timestamp in the last submission");
+  const uint32_t bits = context_.timestamp_valid_bits();
+  const uint64_t mask = bits >= 64 ? UINT64_MAX : (uint64_t(1) << bits) - 1;
+  const uint64_t ticks = (timestamp_values_[to] - timestamp_values_[from]) & mask;
+  return double(ticks) * double(context_.limits().timestampPeriod) * 1e-9;
+}
+
 void Sequence::submit() {
   begin();  // an empty sequence submits an empty command buffer, so wait() works the same
   const auto& vk = context_.vk();
@@ -245,6 +281,12 @@ void Sequence::wait() {
     context_.fail("vkResetFences failed: " + result_name(result));
     throw_result(result, "vkResetFences");
   }
+  timestamp_values_.assign(timestamps_, 0);
+  if (timestamps_)
+    check(vk.vkGetQueryPoolResults(context_.device(), timestamps_pool_, 0, timestamps_,
+                                   timestamp_values_.size() * sizeof(uint64_t), timestamp_values_.data(),
+                                   sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
+          "vkGetQueryPoolResults");
 }
 
 }  // namespace meshcvt::vk

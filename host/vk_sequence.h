@@ -64,6 +64,16 @@ class Sequence {
   /// Whether the GPU has passed `marker` of the current submission (non-blocking).
   bool reached(uint32_t marker) const;
 
+  /// Records a GPU timestamp once everything recorded before it has finished (put it after a
+  /// barrier() to time the dispatches between two of them). Returns its id in this recording; read
+  /// it with timestamp_seconds() after wait(). Throws DeviceError when the queue has no timestamps
+  /// (timestampValidBits 0). For benchmarks: the GPU time of a kernel, without the submission.
+  uint32_t timestamp();
+  /// Seconds between timestamps `from` and `to` of the last completed submission (device clock,
+  /// scaled by timestampPeriod), until the next recording begins. Throws std::out_of_range for a
+  /// timestamp that submission did not write.
+  double timestamp_seconds(uint32_t from, uint32_t to) const;
+
   /// Ends recording and submits to the queue. Throws DeviceError on failure (the context is then failed).
   void submit();
   /// Non-blocking: whether the submitted work has finished. Throws DeviceError when the device is lost.
@@ -90,6 +100,9 @@ class Sequence {
   VkFence fence_ = VK_NULL_HANDLE;
   std::vector<VkEvent> events_;  // markers; events_[i] is marker i of the current recording
   uint32_t markers_ = 0;
+  VkQueryPool timestamps_pool_ = VK_NULL_HANDLE;  // made at the first timestamp()
+  uint32_t timestamps_ = 0;                       // written in the current recording
+  std::vector<uint64_t> timestamp_values_;         // of the last completed submission
   uint32_t dispatches_ = 0;
   State state_ = State::idle;
 };

@@ -131,6 +131,13 @@ uint32_t lloyd_flood_steps(const ClusterProblem& problem, const Topology& topolo
 /// One engine running the boundary-testing iteration: the CPU's BoundaryIteration below, or the
 /// GPU's (host/). Both must take exactly the same decisions; the driver in cluster.cpp does the rest
 /// (rounds, repair, restoring n) with the same code for both.
+/// GPU time of an engine's kernels, from timestamps written between them (bench/gpu_kernel_bench.cpp).
+struct KernelTimes {
+  double boundary_s = 0;              ///< the boundary-test kernel, summed over iterations, in seconds
+  double update_s = 0;                ///< the kernels after it (disk, rank, apply, gather), in seconds
+  uint64_t boundary_dispatches = 0;   ///< boundary-test dispatches timed
+};
+
 class IterationEngine {
  public:
   virtual ~IterationEngine() = default;
@@ -147,6 +154,10 @@ class IterationEngine {
   /// Frees what only step() needs (until the next reset), so that repair, which runs between
   /// rounds, does not add to the peak memory. labels(), generators() and energy() stay valid.
   virtual void release_step_memory() {}
+  /// Asks the engine to time its kernels from now on; false when it cannot (the CPU engine).
+  virtual bool start_kernel_timing() { return false; }
+  /// The kernel times summed since start_kernel_timing(); zero when not timed.
+  virtual KernelTimes kernel_times() const { return {}; }
 };
 
 /// The GPU engine on Vulkan device `device_index` (host/gpu_engine.cpp). Throws DeviceError.

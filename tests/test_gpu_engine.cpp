@@ -245,6 +245,38 @@ TEST_CASE("gpu engine: cluster() with device \"gpu\" equals device \"cpu\" end t
   CHECK(vk::validation_message_count() == messages_before);
 }
 
+TEST_CASE("gpu engine: kernel timing counts every boundary dispatch" * doctest::skip(skip_gpu_tests())) {
+  const int device = gpu_device();
+  Mesh mesh = test::icosphere(3);
+  Topology topology = build_topology(mesh);
+  ClusterOptions options;
+  options.clusters = 17;
+  ClusterProblem problem = make_cluster_problem(mesh, options);
+  std::vector<uint32_t> initial = initial_clustering(problem, mesh, topology, Init::hierarchical, 17, 1);
+  WorkerPool pool(1);
+  BoundaryIteration cpu(problem, mesh, topology, TopologyMode::preserving, true, pool);
+  CHECK_FALSE(cpu.start_kernel_timing());
+  CHECK(cpu.kernel_times().boundary_dispatches == 0);
+
+  std::unique_ptr<IterationEngine> gpu = make_gpu_iteration(problem, mesh, topology, TopologyMode::preserving, true, device);
+  gpu->reset(initial);
+  gpu->step();  // not timed
+  CHECK(gpu->kernel_times().boundary_dispatches == 0);
+  REQUIRE(gpu->start_kernel_timing());
+  uint64_t steps = 0, moves = 0;
+  for (; steps < 100; ) {
+    IterationRecord r = gpu->step();
+    ++steps;
+    moves += r.moves;
+    if (r.moves == 0) break;
+  }
+  REQUIRE(moves > 0);  // the update kernels ran too
+  const KernelTimes k = gpu->kernel_times();
+  CHECK(k.boundary_dispatches == steps);
+  CHECK(k.boundary_s > 0.0);
+  CHECK(k.update_s > 0.0);
+}
+
 TEST_CASE("gpu engine: a bad device index is a DeviceError") {
   if (skip_gpu_tests()) return;
   Mesh m = test::icosphere(1);

@@ -414,6 +414,41 @@ TEST_CASE("vk: a marker lets the host read a counter before the sequence ends" *
   CHECK(vk::validation_message_count() == messages);
 }
 
+TEST_CASE("vk: timestamps measure the work between them" * doctest::skip(skip_gpu_tests())) {
+  const uint32_t index = test_device();
+  const uint64_t messages = vk::validation_message_count();
+  {
+    vk::Context context(index);
+    vk::ComputePipeline pipeline(context, vk::self_test_spirv(), "selftest", sizeof(vk::SelfTestPush), 64);
+    vk::Buffer spin(context, 256 * 8, vk::MemoryUse::device, "spin results");
+    vk::SelfTestPush push;
+    push.results = spin.address();
+    push.mode = vk::self_test_spin;
+    push.count = 256;
+    push.spin = 2000;
+    vk::Sequence sequence(context);
+    for (int round = 0; round < 2; ++round) {  // the second recording reuses the query pool
+      const uint32_t a = sequence.timestamp();
+      sequence.dispatch_1d(pipeline, 256, push).barrier();
+      const uint32_t b = sequence.timestamp();
+      sequence.dispatch_1d(pipeline, 256, push).barrier();
+      const uint32_t c = sequence.timestamp();
+      CHECK(b == a + 1);
+      CHECK(c == b + 1);
+      CHECK_THROWS_AS((void)sequence.timestamp_seconds(a, c), std::out_of_range);  // not yet submitted
+      sequence.run();
+      const double ab = sequence.timestamp_seconds(a, b), bc = sequence.timestamp_seconds(b, c);
+      CHECK(sequence.timestamp_seconds(a, a) == 0.0);
+      CHECK(ab > 0.0);  // a dispatch of busy work lies between them
+      CHECK(bc > 0.0);
+      CHECK(ab < 60.0);
+      CHECK(sequence.timestamp_seconds(a, c) == doctest::Approx(ab + bc).epsilon(1e-9));
+      CHECK_THROWS_AS((void)sequence.timestamp_seconds(a, c + 1), std::out_of_range);
+    }
+  }
+  CHECK(vk::validation_message_count() == messages);
+}
+
 TEST_CASE("vk: a wait that times out fails the context instead of hanging" * doctest::skip(skip_gpu_tests())) {
   const uint32_t index = test_device();
   const uint64_t messages = vk::validation_message_count();
