@@ -159,6 +159,19 @@ Sequence& Sequence::copy(const Buffer& source, Buffer& destination, uint64_t byt
   return *this;
 }
 
+Sequence& Sequence::copy_regions(const Buffer& source, Buffer& destination, const std::vector<VkBufferCopy>& regions) {
+  for (const VkBufferCopy& r : regions)
+    if (r.srcOffset > source.size() || r.size > source.size() - r.srcOffset || r.dstOffset > destination.size() ||
+        r.size > destination.size() - r.dstOffset || r.size == 0)
+      throw std::out_of_range("meshcvt::vk::Sequence: a copy region of " + std::to_string(r.size) + " bytes from " +
+                              source.name() + " to " + destination.name() + " is out of range or empty");
+  begin();
+  if (regions.empty()) return *this;
+  context_.vk().vkCmdCopyBuffer(commands_, source.handle(), destination.handle(), uint32_t(regions.size()),
+                                regions.data());
+  return *this;
+}
+
 Sequence& Sequence::fill(Buffer& destination, uint32_t value, uint64_t offset, uint64_t bytes) {
   if (bytes == UINT64_MAX) bytes = offset < destination.size() ? destination.size() - offset : 0;
   if (offset % 4 || bytes % 4 || offset > destination.size() || bytes > destination.size() - offset)

@@ -53,6 +53,9 @@ class Sequence {
   /// Copies `bytes` from `source` at source_offset to `destination` at destination_offset.
   Sequence& copy(const Buffer& source, Buffer& destination, uint64_t bytes, uint64_t source_offset = 0,
                  uint64_t destination_offset = 0);
+  /// Copies each region (srcOffset, dstOffset, size in bytes) from `source` to `destination` in
+  /// one command: many small scattered pieces at the cost of one copy.
+  Sequence& copy_regions(const Buffer& source, Buffer& destination, const std::vector<VkBufferCopy>& regions);
   /// Fills `bytes` (multiple of 4; UINT64_MAX: to the end) of `destination` from `offset` with the
   /// 32-bit `value`.
   Sequence& fill(Buffer& destination, uint32_t value, uint64_t offset = 0, uint64_t bytes = UINT64_MAX);
