@@ -275,6 +275,7 @@ DeviceInfo describe_device(VkPhysicalDevice physical, uint32_t index) {
 
   // Extended properties: the structs may only be chained for devices of the version that has them.
   const uint32_t api = properties.apiVersion;
+  bool subgroup_ballot = false;
   if (api >= VK_API_VERSION_1_1) {
     VkPhysicalDeviceSubgroupProperties subgroup{};
     subgroup.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES;
@@ -286,6 +287,8 @@ DeviceInfo describe_device(VkPhysicalDevice physical, uint32_t index) {
     properties2.pNext = &subgroup;
     vkGetPhysicalDeviceProperties2(physical, &properties2);
     info.subgroup_size = subgroup.subgroupSize;
+    subgroup_ballot = (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
+                      (subgroup.supportedOperations & VK_SUBGROUP_FEATURE_BALLOT_BIT);
     if (api >= VK_API_VERSION_1_2) {
       info.driver_name = driver.driverName;
       info.driver_info = driver.driverInfo;
@@ -305,6 +308,7 @@ DeviceInfo describe_device(VkPhysicalDevice physical, uint32_t index) {
     if (!features.features.shaderInt64) missing.push_back("shaderInt64");
     if (!features12.shaderBufferInt64Atomics) missing.push_back("shaderBufferInt64Atomics");
     if (!features12.bufferDeviceAddress) missing.push_back("bufferDeviceAddress");
+    if (!subgroup_ballot) missing.push_back("subgroup ballot operations in compute shaders");
   }
   if (compute_queue_family(physical) == UINT32_MAX) missing.push_back("a compute queue");
   for (size_t i = 0; i < missing.size(); ++i) info.missing_features += (i ? ", " : "") + missing[i];

@@ -14,7 +14,7 @@ const uint FLAG_ALL_ACCEPTED = 2u;
 
 void mark_changed(Table t, uint c) {
   if (atomicExchange(t.changed_flags.v[c], 1u) == 0u)
-    t.changed_list.v[atomicAdd(t.counters.v[COUNTER_CHANGED], 1u)] = c;
+    t.changed_list.v[counter_increment(t, COUNTER_CHANGED)] = c;
 }
 
 void main() {
@@ -34,7 +34,7 @@ void main() {
     atomicAdd(t.sums.v[5u * from + k], -v);
     atomicAdd(t.sums.v[5u * to + k], v);
   }
-  atomicAdd(t.counters.v[COUNTER_MOVES], 1u);
+  counter_increment(t, COUNTER_MOVES);
   mark_changed(t, from);
   mark_changed(t, to);
   t.dirty.v[f] = 1u;

@@ -36,7 +36,7 @@ void main() {
     }
   }
   if (!test_it || !border) return;
-  atomicAdd(t.counters.v[COUNTER_EVALUATED], 1u);
+  counter_increment(t, COUNTER_EVALUATED);
 
   const vec3 xf = face_point(t, f);
   const float w_f = t.weights.v[f];
@@ -66,6 +66,6 @@ void main() {
   if (best != NONE) {
     t.destination.v[f] = best;
     t.state.v[f] = 1u;
-    t.proposals.v[atomicAdd(t.counters.v[COUNTER_PROPOSALS], 1u)] = f;
+    t.proposals.v[counter_increment(t, COUNTER_PROPOSALS)] = f;
   }
 }

@@ -8,6 +8,7 @@
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
+#extension GL_KHR_shader_subgroup_ballot : require
 
 layout(local_size_x_id = 0) in;
 
@@ -63,6 +64,18 @@ uint invocation_index() {
 vec3 face_point(Table t, uint f) { return vec3(t.points.v[3u * f], t.points.v[3u * f + 1u], t.points.v[3u * f + 2u]); }
 vec3 generator(Table t, uint c) {
   return vec3(t.generators.v[3u * c], t.generators.v[3u * c + 1u], t.generators.v[3u * c + 2u]);
+}
+
+// atomicAdd(counters[which], 1) for each invocation that calls it, with one atomic per subgroup:
+// returns the caller's slot (the counter's old value plus the caller's rank among the subgroup's
+// callers). Thousands of invocations adding to one address serialize at the memory (the boundary
+// test on 4.8M faces spent most of its time there on an H200); the slots are a permutation of the
+// same values, and every list filled by them is read in any order.
+uint counter_increment(Table t, uint which) {
+  const uvec4 callers = subgroupBallot(true);
+  uint base = 0u;
+  if (subgroupElect()) base = atomicAdd(t.counters.v[which], subgroupBallotBitCount(callers));
+  return subgroupBroadcastFirst(base) + subgroupBallotExclusiveBitCount(callers);
 }
 
 // Vertex ring of face f (faces sharing a vertex, f excluded) in increasing id, without repeats:

@@ -65,7 +65,7 @@ void print_text(const std::vector<DeviceInfo>& devices, const std::vector<SelfTe
     std::printf("  subgroup size              %u\n", d.subgroup_size);
     std::printf("  maxComputeWorkGroupCount.x %u\n", d.max_workgroup_count_x);
     if (d.usable)
-      std::printf("  meshcvt                    usable (shaderInt64, shaderBufferInt64Atomics, bufferDeviceAddress)\n");
+      std::printf("  meshcvt                    usable (shaderInt64, shaderBufferInt64Atomics, bufferDeviceAddress, subgroup ballot)\n");
     else
       std::printf("  meshcvt                    not usable: lacks %s\n", d.missing_features.c_str());
     if (tests[i].ran) {

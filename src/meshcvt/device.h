@@ -30,7 +30,8 @@ struct DeviceInfo {
   uint32_t subgroup_size = 0;             ///< invocations per subgroup (0 when unknown)
   uint32_t max_workgroup_count_x = 0;     ///< maxComputeWorkGroupCount[0]
   /// True when meshcvt can run on it: Vulkan 1.2, a compute queue, and the features
-  /// shaderInt64, shaderBufferInt64Atomics and bufferDeviceAddress.
+  /// shaderInt64, shaderBufferInt64Atomics, bufferDeviceAddress, and subgroup ballot operations
+  /// in compute shaders.
   bool usable = false;
   /// Why not usable: the missing items, comma-separated (e.g. "shaderInt64, bufferDeviceAddress");
   /// empty when usable.
