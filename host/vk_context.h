@@ -110,6 +110,8 @@ class Context {
   uint32_t queue_family() const { return queue_family_; }
   const DeviceInfo& info() const { return info_; }
   const VkPhysicalDeviceLimits& limits() const { return limits_; }
+  /// The largest single allocation in bytes (maxMemoryAllocationSize).
+  uint64_t max_allocation_bytes() const { return max_allocation_size_; }
   /// The compute queue's timestampValidBits (0: no timestamps).
   uint32_t timestamp_valid_bits() const { return timestamp_valid_bits_; }
   bool validation() const { return instance_.validation(); }
