@@ -77,7 +77,8 @@ static int run(int argc, char** argv) {
 
   // GPU engine, accelerated: as `cluster` runs it.
   start = Clock::now();
-  std::unique_ptr<IterationEngine> gpu = make_gpu_iteration(problem, mesh, topology, TopologyMode::preserving, true, device);
+  std::unique_ptr<IterationEngine> gpu =
+      make_gpu_iteration(problem, mesh, topology, TopologyMode::preserving, true, device);
   const double setup_s = since(start);
   if (!gpu->start_kernel_timing()) throw std::runtime_error("the GPU engine cannot time its kernels");
   start = Clock::now();

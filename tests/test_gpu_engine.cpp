@@ -258,7 +258,8 @@ TEST_CASE("gpu engine: kernel timing counts every boundary dispatch" * doctest::
   CHECK_FALSE(cpu.start_kernel_timing());
   CHECK(cpu.kernel_times().boundary_dispatches == 0);
 
-  std::unique_ptr<IterationEngine> gpu = make_gpu_iteration(problem, mesh, topology, TopologyMode::preserving, true, device);
+  std::unique_ptr<IterationEngine> gpu =
+      make_gpu_iteration(problem, mesh, topology, TopologyMode::preserving, true, device);
   gpu->reset(initial);
   gpu->step();  // not timed
   CHECK(gpu->kernel_times().boundary_dispatches == 0);
