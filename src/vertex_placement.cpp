@@ -589,6 +589,12 @@ std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<ui
                                         nullptr);
 }
 
+double subdivision_faces_per_cluster(VertexPlacement placement) {
+  return placement == VertexPlacement::qem ? 20.0 : 10.0;
+}
+
+bool subdivides_by_default(VertexPlacement placement) { return placement == VertexPlacement::qem; }
+
 VertexPlacement parse_vertex_placement(const std::string& s) {
   if (s == "closest") return VertexPlacement::closest;
   if (s == "projected") return VertexPlacement::projected;
