@@ -11,6 +11,10 @@
 //               eigenvalues truncated toward the mass centroid (Lindstrom's robust solve), then
 //               clamped toward the centroid to stay near the cluster.
 //
+// Also here: the input resolution each placement asks for (subdivision_faces_per_cluster): qem wants
+// ACVD's 10 vertices per cluster, since its points and lent planes come from the clusters' faces
+// and borders, which at a dozen faces per cluster are too coarse for creases.
+//
 // Everything is one or two linear passes over faces and vertices with per-cluster accumulators in
 // double; the order of accumulation is fixed (face order), so the result is deterministic.
 #include <algorithm>

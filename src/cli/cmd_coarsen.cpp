@@ -1,5 +1,7 @@
 // meshcvt CLI: `meshcvt coarsen` — clusters a mesh (CVT or CCVT) and builds the coarse mesh from
 // the clusters (Fan et al. Section 6.1), then measures it (Table 1 columns, distance to the input).
+// Without --subdivide, `qem` refines a coarse input as ACVD does (subdivides_by_default in
+// meshcvt/coarsen.h); the other placements take the input as given.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
