@@ -11,6 +11,10 @@
 //               eigenvalues truncated toward the mass centroid (Lindstrom's robust solve), then
 //               clamped toward the centroid to stay near the cluster.
 //
+// Also here: the input resolution each placement asks for (subdivision_faces_per_cluster): qem wants
+// ACVD's 10 vertices per cluster, since its points and lent planes come from the clusters' faces
+// and borders, which at a dozen faces per cluster are too coarse for creases.
+//
 // Everything is one or two linear passes over faces and vertices with per-cluster accumulators in
 // double; the order of accumulation is fixed (face order), so the result is deterministic.
 #include <algorithm>
@@ -588,6 +592,12 @@ std::vector<float> place_cluster_vertices(const Mesh& mesh, const std::vector<ui
                                         detail::mass_centroids(mesh, labels, clusters, face_weights), 0, nullptr,
                                         nullptr);
 }
+
+double subdivision_faces_per_cluster(VertexPlacement placement) {
+  return placement == VertexPlacement::qem ? 20.0 : 10.0;
+}
+
+bool subdivides_by_default(VertexPlacement placement) { return placement == VertexPlacement::qem; }
 
 VertexPlacement parse_vertex_placement(const std::string& s) {
   if (s == "closest") return VertexPlacement::closest;

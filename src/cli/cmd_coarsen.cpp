@@ -1,5 +1,7 @@
 // meshcvt CLI: `meshcvt coarsen` — clusters a mesh (CVT or CCVT) and builds the coarse mesh from
 // the clusters (Fan et al. Section 6.1), then measures it (Table 1 columns, distance to the input).
+// Without --subdivide, `qem` refines a coarse input as ACVD does (subdivides_by_default in
+// meshcvt/coarsen.h); the other placements take the input as given.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -31,13 +33,14 @@ struct CoarsenArgs {
   unsigned threads = 0;
   bool quiet = false, no_weld = false, no_error = false, no_flips = false, no_fit_swaps = false;
   double gradation = 0;   ///< --gradation g: curvature-adaptive density (meshcvt/density.h); 0 = uniform
-  std::string subdivide;  ///< --subdivide auto|K: "" = none
+  std::string subdivide;  ///< --subdivide auto|K: "" = the placement's default (subdivides_by_default)
 };
 
-// --subdivide: "" -> 0 levels, "0".."6" -> that many, "auto" -> kSubdivideAuto; else OptionError.
+// --subdivide: "" -> 0 levels, or kSubdivideAuto where the placement subdivides by default;
+// "0".."6" -> that many, "auto" -> kSubdivideAuto; else OptionError.
 constexpr int kSubdivideAuto = -1;
-int parse_subdivide(const std::string& s) {
-  if (s.empty()) return 0;
+int parse_subdivide(const std::string& s, VertexPlacement placement) {
+  if (s.empty()) return subdivides_by_default(placement) ? kSubdivideAuto : 0;
   if (s == "auto") return kSubdivideAuto;
   if (s.size() == 1 && s[0] >= '0' && s[0] <= '6') return s[0] - '0';
   throw OptionError("--subdivide must be auto or a number of levels 0..6, not '" + s + "'");
@@ -90,11 +93,11 @@ void run_coarsen(const CoarsenArgs& a) {
   options.threads = a.threads;
   options.device = a.device;
   // Checked before reading, so a bad value costs no I/O; options.density is set once the mesh is read.
-  int subdivide = parse_subdivide(a.subdivide);
-  if (!(a.gradation >= 0) || !std::isfinite(a.gradation))
-    throw OptionError("--gradation must be a finite number >= 0, not " + std::to_string(a.gradation));
   CoarsenOptions co;
   co.placement = parse_vertex_placement(a.placement);
+  int subdivide = parse_subdivide(a.subdivide, co.placement);
+  if (!(a.gradation >= 0) || !std::isfinite(a.gradation))
+    throw OptionError("--gradation must be a finite number >= 0, not " + std::to_string(a.gradation));
   co.threads = a.threads;
   co.flip_edges = !a.no_flips;
   co.relax_passes = a.relax_passes;
@@ -112,9 +115,10 @@ void run_coarsen(const CoarsenArgs& a) {
   // sharper) and each subdivided face inherits its parent's: children of f are [f 4^k, (f+1) 4^k).
   t0 = Clock::now();
   const size_t input_faces = mesh.face_count();
-  const unsigned subdivision_levels = subdivide == kSubdivideAuto
-                                          ? subdivision_levels_for(input_faces, a.clusters, 10)
-                                          : unsigned(subdivide);
+  const unsigned subdivision_levels =
+      subdivide == kSubdivideAuto
+          ? subdivision_levels_for(input_faces, a.clusters, subdivision_faces_per_cluster(co.placement))
+          : unsigned(subdivide);
   std::vector<float> density;  // empty: uniform
   if (a.gradation > 0) density = curvature_density(mesh, build_topology(mesh), a.gradation);
   if (subdivision_levels > 0) {
@@ -251,7 +255,8 @@ const RegisterCommand reg(30, [](CLI::App& app) {
                   "curvature-adaptive density: 0 uniform (default), larger = more, smaller triangles where the "
                   "surface bends (edge length ~ (1 + curvature x diagonal)^(-g/4))");
   sub->add_option("--subdivide", a->subdivide,
-                  "auto | K (0..6): subdivide the input first, K times or (auto) until it has >= 10 faces per vertex");
+                  "auto | K (0..6): subdivide the input first, K times or (auto) until it has >= 10 faces per vertex (qem: "
+                  "20, as ACVD's 10 vertices; qem's default is auto, the others' 0)");
   sub->add_option("--fix-rounds", a->fix_rounds,
                   "rounds of fixing the clustering where its dual is not a manifold (default 12; 0 = report only)");
   sub->add_option("--threads", a->threads, "worker threads, 0 = all cores");

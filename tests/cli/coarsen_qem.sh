@@ -5,6 +5,9 @@
 #   vertices, checked here in Python from the file;
 # - --no-fit-swaps moves vertices only (swapped_edges 0) and its RMS distance is higher than the
 #   default's; --fit-passes 0 does neither and is higher still;
+# - without --subdivide, qem subdivides as ACVD does (20 faces per cluster: the elephant's 5558 faces
+#   for 300 vertices get one level, subdivision_levels 1 in the report); --subdivide 0 keeps the
+#   input as given, and `projected` does so by default;
 # - a bad --fit-passes exits 2 and writes nothing.
 # usage: coarsen_qem.sh /path/to/meshcvt /path/to/tests/data
 set -euo pipefail
@@ -23,6 +26,9 @@ run() {  # run NAME [options...]
 run swaps
 run moves --no-fit-swaps
 run none --fit-passes 0
+run raw --subdivide 0
+"$cli" coarsen "$data/elephant.off" -n 300 -o "$tmp/projected.off" --report "$tmp/projected.json" -q ||
+  fail "coarsen (projected) failed"
 
 python3 - "$tmp" <<'PY' || fail "report or output check failed"
 import json, sys
@@ -32,6 +38,9 @@ assert r["swaps"]["fit_swaps"] is True and r["moves"]["fit_swaps"] is False, "fi
 assert r["swaps"]["swapped_edges"] > 0 and r["swaps"]["fitted_moves"] > 0, r["swaps"]
 assert r["moves"]["swapped_edges"] == 0 and r["moves"]["fitted_moves"] > 0, r["moves"]
 assert r["none"]["swapped_edges"] == 0 and r["none"]["fitted_moves"] == 0, r["none"]
+levels = {k: json.load(open(f"{tmp}/{k}.json"))["subdivision_levels"] for k in ("swaps", "raw", "projected")}
+assert levels == {"swaps": 1, "raw": 0, "projected": 0}, levels
+assert all(v["subdivision_levels"] == 1 for v in r.values()), "qem's default should subdivide"
 rms = {k: v["error"]["rms"] for k, v in r.items()}
 assert rms["swaps"] < rms["moves"] < rms["none"], rms
 
