@@ -10,7 +10,7 @@ namespace meshcvt {
 WorkerPool::WorkerPool(unsigned threads) {
   if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
   threads_ = threads;
-  for (unsigned i = 1; i < threads_; ++i) workers_.emplace_back([this, i] { worker_loop(i); });
+  for (unsigned i = 1; i < threads_; ++i) workers_.emplace_back([this] { worker_loop(); });
 }
 
 WorkerPool::~WorkerPool() {
@@ -72,20 +72,18 @@ bool spin_until(const Done& done) {
 }
 }  // namespace
 
-void WorkerPool::worker_loop(unsigned id) {
-  unsigned seen = 0;
+void WorkerPool::run_claimed(uint32_t generation) {
   for (;;) {
-    auto ready = [&] { return stop_.load(std::memory_order_acquire) || generation_.load(std::memory_order_acquire) != seen; };
-    if (!spin_until(ready)) {
-      std::unique_lock<std::mutex> lock(mutex_);
-      wake_.wait(lock, ready);
-    }
-    if (stop_.load(std::memory_order_acquire)) return;
-    seen = generation_.load(std::memory_order_acquire);  // job_ and count_ were written before it
-    const std::function<void(size_t, size_t, unsigned)>* job = job_;
-    const size_t count = count_;
+    uint64_t claim = claim_.load(std::memory_order_acquire);
+    uint32_t range;
+    do {
+      range = uint32_t(claim);
+      if (claim >> 32 != generation || range >= threads_) return;  // another job, or nothing left
+    } while (!claim_.compare_exchange_weak(claim, claim + 1, std::memory_order_acq_rel, std::memory_order_acquire));
+    // The claim holds the job: the caller does not return, nor publish another, before this range
+    // is finished, so job_ and count_ are this generation's.
     try {
-      run_range(*job, count, threads_, id);
+      run_range(*job_, count_, threads_, range);
     } catch (...) {
       std::lock_guard<std::mutex> lock(mutex_);
       if (!error_) error_ = std::current_exception();
@@ -97,34 +95,45 @@ void WorkerPool::worker_loop(unsigned id) {
   }
 }
 
+void WorkerPool::worker_loop() {
+  unsigned seen = 0;
+  for (;;) {
+    auto ready = [&] { return stop_.load(std::memory_order_acquire) || generation_.load(std::memory_order_acquire) != seen; };
+    if (!spin_until(ready)) {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait(lock, ready);
+    }
+    if (stop_.load(std::memory_order_acquire)) return;
+    seen = generation_.load(std::memory_order_acquire);
+    run_claimed(seen);
+  }
+}
+
 void WorkerPool::run(size_t count, const std::function<void(size_t, size_t, unsigned)>& fn, size_t min_parallel) {
   // Small jobs are not worth waking anybody for.
   if (threads_ == 1 || count < std::max<size_t>(min_parallel, 2)) {
     if (count) fn(0, count, 0);
     return;
   }
+  uint32_t generation;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     job_ = &fn;
     count_ = count;
     error_ = nullptr;
-    pending_.store(threads_ - 1, std::memory_order_relaxed);
-    generation_.fetch_add(1, std::memory_order_release);
+    pending_.store(threads_, std::memory_order_relaxed);
+    generation = generation_.load(std::memory_order_relaxed) + 1;
+    claim_.store(uint64_t(generation) << 32, std::memory_order_release);
+    generation_.store(generation, std::memory_order_release);
   }
   wake_.notify_all();
-  std::exception_ptr mine;
-  try {
-    run_range(fn, count, threads_, 0);
-  } catch (...) {
-    mine = std::current_exception();
-  }
+  run_claimed(generation);  // the caller takes ranges too, all of them if nobody else comes
   auto finished = [&] { return pending_.load(std::memory_order_acquire) == 0; };
   if (!spin_until(finished)) {
     std::unique_lock<std::mutex> lock(mutex_);
     done_.wait(lock, finished);
   }
-  std::lock_guard<std::mutex> lock(mutex_);  // error_ as the workers left it
-  if (mine) std::rethrow_exception(mine);
+  std::lock_guard<std::mutex> lock(mutex_);  // error_ as the threads left it
   if (error_) std::rethrow_exception(error_);
 }
 

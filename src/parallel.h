@@ -27,13 +27,18 @@ class WorkerPool {
   unsigned size() const { return threads_; }
 
   /// Runs fn(begin, end, worker) over [0, count) in size() contiguous ranges (fewer when count is
-  /// small) and returns when all are done. `worker` is in [0, size()). An exception thrown by fn is
-  /// rethrown here (the first one). Below `min_parallel` items the calling thread does all of it:
-  /// the default suits items of a few nanoseconds (faces); pass less for heavy items (clusters).
+  /// small) and returns when all are done. `worker` is the range's index in [0, size()): each range
+  /// runs once, on whichever thread claims it first, the caller's included, so a worker that wakes
+  /// late (a halted virtual CPU can take milliseconds) delays nothing: the others take its range.
+  /// An exception thrown by fn is rethrown here (the first one). Below `min_parallel` items the
+  /// calling thread does all of it: the default suits items of a few nanoseconds (faces); pass
+  /// less for heavy items (clusters).
   void run(size_t count, const std::function<void(size_t, size_t, unsigned)>& fn, size_t min_parallel = 2048);
 
  private:
-  void worker_loop(unsigned id);
+  void worker_loop();
+  // Claims and runs ranges of job `generation` until none is left.
+  void run_claimed(uint32_t generation);
   unsigned threads_;
   std::vector<std::thread> workers_;
   // A new job is published by raising generation_ (under mutex_, for the sleepers); workers and
@@ -44,7 +49,10 @@ class WorkerPool {
   std::condition_variable wake_, done_;
   const std::function<void(size_t, size_t, unsigned)>* job_ = nullptr;
   size_t count_ = 0;
-  std::atomic<unsigned> generation_{0}, pending_{0};
+  // The job's generation (high 32 bits) and its next unclaimed range (low 32 bits): a claim is a
+  // compare-and-swap on both, so a thread still holding an older generation can claim nothing.
+  std::atomic<uint64_t> claim_{0};
+  std::atomic<unsigned> generation_{0}, pending_{0};  // pending_: ranges not yet finished
   std::atomic<bool> stop_{false};
   std::exception_ptr error_;
 };
