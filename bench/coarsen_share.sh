@@ -13,7 +13,8 @@ shift
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cases=(bench/data/meshes/bunny00.off 500 bench/data/meshes/fandisk.off 1000
-       bench/data/meshes/refined_elephant.off 1000 bench/data/sphere-131k.off 200 bench/data/bunny-1.2M.ply 10000)
+       bench/data/meshes/refined_elephant.off 1000 bench/data/sphere-131k.off 200 bench/data/bunny-1.2M.ply 10000
+       bench/data/bunny-4.8M.ply 10000)
 for ((i = 0; i < ${#cases[@]}; i += 2)); do
   mesh=${cases[i]} n=${cases[i + 1]}
   [ -f "$mesh" ] || continue
