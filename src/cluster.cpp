@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <future>
+#include <system_error>
 #include <string>
 #include <thread>
 
@@ -138,11 +140,23 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
   WorkerPool pool(options.threads);
   ClusterProblem problem = make_cluster_problem(mesh, options, &pool);
   std::unique_ptr<IterationEngine> engine;
-  if (choice.use_gpu)
-    engine = make_gpu_iteration(problem, mesh, topology, options.topology, options.accelerate, choice.device_index);
-  else
+  // The GPU engine's setup (device, pipelines, the arrays' upload: 0.6 s for 4.8M faces on an H200)
+  // needs only the problem, so it runs on its own thread beside the initialization, which keeps
+  // the pool busy on the CPU; the engine is taken before the first iteration. (An error there,
+  // DeviceError say, comes out of get(); where no thread can be had it is built here.)
+  std::future<std::unique_ptr<IterationEngine>> gpu_setup;
+  auto make_gpu = [&] {
+    return make_gpu_iteration(problem, mesh, topology, options.topology, options.accelerate, choice.device_index);
+  };
+  if (choice.use_gpu) {
+    try {
+      gpu_setup = std::async(std::launch::async, make_gpu);
+    } catch (const std::system_error&) {
+      engine = make_gpu();
+    }
+  } else {
     engine = std::make_unique<BoundaryIteration>(problem, mesh, topology, options.topology, options.accelerate, pool);
-  out.device = engine->description();
+  }
   out.timings.setup = seconds_since(t_start);
 
   auto t = Clock::now();
@@ -190,6 +204,12 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
   }
   if (options.component_clusters.empty()) cluster_component.clear();
   out.timings.init = seconds_since(t);
+  if (gpu_setup.valid()) {
+    t = Clock::now();
+    engine = gpu_setup.get();
+    out.timings.setup += seconds_since(t);  // what the initialization did not hide
+  }
+  out.device = engine->description();
   if (options.progress) options.progress(ClusterProgress{"init", 0, 0});
 
   IterationEngine& it = *engine;

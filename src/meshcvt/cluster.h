@@ -99,7 +99,9 @@ struct RepairStats {
   uint32_t restored_clusters = 0;    ///< clusters re-created by splitting to get back to n
 };
 
-/// Time spent in each phase, seconds.
+/// Time spent in each phase, seconds. setup: the problem and the engine; the GPU engine's own
+/// setup (device, pipelines, uploads) runs beside the initialization, and only what the
+/// initialization did not hide counts here.
 struct ClusterTimings {
   double setup = 0, init = 0, iterate = 0, repair = 0, total = 0;
 };
