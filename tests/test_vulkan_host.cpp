@@ -82,6 +82,16 @@ DeviceInfo fake_device(uint32_t index, const char* type, bool usable, const char
   return d;
 }
 
+// Busy work for selftest.comp: `count` invocations of `spin` LCG steps each, into `results`.
+vk::SelfTestPush spin_push(const vk::Buffer& results, uint32_t count, uint32_t spin) {
+  vk::SelfTestPush push;
+  push.results = results.address();
+  push.mode = vk::self_test_spin;
+  push.count = count;
+  push.spin = spin;
+  return push;
+}
+
 std::string error_text(const std::function<void()>& f) {
   try {
     f();
@@ -429,11 +439,7 @@ TEST_CASE("vk: timestamps measure the work between them" * doctest::skip(skip_gp
     vk::Context context(index);
     vk::ComputePipeline pipeline(context, vk::self_test_spirv(), "selftest", sizeof(vk::SelfTestPush), 64);
     vk::Buffer spin(context, 256 * 8, vk::MemoryUse::device, "spin results");
-    vk::SelfTestPush push;
-    push.results = spin.address();
-    push.mode = vk::self_test_spin;
-    push.count = 256;
-    push.spin = 2000;
+    const vk::SelfTestPush push = spin_push(spin, 256, 2000);
     vk::Sequence sequence(context);
     for (int round = 0; round < 2; ++round) {  // the second recording reuses the query pool
       const uint32_t a = sequence.timestamp();
@@ -466,11 +472,7 @@ TEST_CASE("vk: a wait that times out fails the context instead of hanging" * doc
     vk::Context context(index, options);
     vk::ComputePipeline pipeline(context, vk::self_test_spirv(), "selftest", sizeof(vk::SelfTestPush), 64);
     vk::Buffer results(context, 1024 * 8, vk::MemoryUse::device, "spin results");
-    vk::SelfTestPush push;
-    push.results = results.address();
-    push.mode = vk::self_test_spin;
-    push.count = 1024;
-    push.spin = 100000;
+    const vk::SelfTestPush push = spin_push(results, 1024, 100000);
     {
       vk::Sequence sequence(context);
       sequence.dispatch_1d(pipeline, 1024, push);
