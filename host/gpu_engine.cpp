@@ -318,8 +318,8 @@ void GpuIteration::reset(std::vector<uint32_t> labels) {
 }
 
 // The generators the last iteration changed (all after reset) go up before the next boundary test:
-// written to the mapped upload buffer and copied, one region per cluster, at the head of the
-// boundary test's submission. (On a discrete GPU a separate upload would cost a staging buffer and
+// written to the mapped upload buffer and copied, in runs, at the head of the boundary test's
+// submission. (On a discrete GPU a separate upload would cost a staging buffer and
 // a submission each iteration: 4-5 ms per iteration on an H200, against tens of microseconds of
 // kernels.)
 void GpuIteration::record_generator_upload(vk::Sequence& seq) {
