@@ -116,6 +116,11 @@ double timeout_from_environment() {
 
 }  // namespace
 
+bool vulkan_loaded() {
+  std::lock_guard<std::mutex> lock(g_load_mutex);
+  return g_loaded;
+}
+
 void load_vulkan() {
   std::lock_guard<std::mutex> lock(g_load_mutex);
   if (g_loaded) return;

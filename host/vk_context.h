@@ -22,6 +22,8 @@ namespace meshcvt::vk {
 /// Opens the Vulkan loader once per process ($MESHCVT_VULKAN_LIBRARY, else libvulkan.so.1).
 /// Throws DeviceError naming what to install when it cannot. Thread-safe.
 void load_vulkan();
+/// Whether load_vulkan() has succeeded in this process.
+bool vulkan_loaded();
 
 /// Validation-layer messages (warnings and errors) seen so far by any instance of this process.
 /// GPU tests assert it stays 0 with MESHCVT_VALIDATION=1.

@@ -133,7 +133,7 @@ Clustering cluster(const Mesh& mesh, const ClusterOptions& options) {
 
 Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOptions& options) {
   auto t_start = Clock::now();
-  DeviceChoice choice = resolve_device(options.device);
+  DeviceChoice choice = resolve_device_for_mesh(options.device, mesh.face_count());
 
   Clustering out;
   out.device_notice = choice.notice;

@@ -162,6 +162,11 @@ DeviceChoice resolve_device(const std::string& request) {
   return resolve(parsed, list_devices());
 }
 
+DeviceChoice resolve_device_for_mesh(const std::string& request, size_t faces) {
+  if (faces < kAutoGpuMinFaces && parse_request(request).kind == Request::automatic) return cpu_choice();
+  return resolve_device(request);
+}
+
 double self_test_device(uint32_t index) {
   const auto start = std::chrono::steady_clock::now();
   const uint64_t messages_before = vk::validation_message_count();

@@ -176,6 +176,33 @@ TEST_CASE("resolve_device: empty request reads MESHCVT_DEVICE") {
   }
 }
 
+TEST_CASE("resolve_device_for_mesh: auto keeps meshes below a million faces on the CPU, unprobed") {
+  // A probe here would fail loudly: Vulkan is forced to be probed and its loader does not exist.
+  // (ctest runs each case in a process of its own, so the loader is not already loaded.)
+  ScopedEnv probe("MESHCVT_PROBE_VULKAN", "1");
+  ScopedEnv loader("MESHCVT_VULKAN_LIBRARY", "/nonexistent/libvulkan.so.1");
+  ScopedEnv no_default("MESHCVT_DEVICE", nullptr);
+  for (const char* request : {"auto", ""}) {
+    CAPTURE(request);
+    const DeviceChoice small = resolve_device_for_mesh(request, kAutoGpuMinFaces - 1);
+    CHECK_FALSE(small.use_gpu);
+    CHECK(small.notice.empty());
+    CHECK(small.description == "cpu");
+  }
+  {
+    ScopedEnv from_environment("MESHCVT_DEVICE", "auto");
+    CHECK(resolve_device_for_mesh("", 10).notice.empty());
+  }
+  CHECK(resolve_device_for_mesh("cpu", kAutoGpuMinFaces).description == "cpu");
+  // An explicit GPU request is not second-guessed by size: it probes, and fails without a loader
+  // (unless an earlier case in this process loaded one).
+  if (!vk::vulkan_loaded()) {
+    CHECK_THROWS_AS(resolve_device_for_mesh("gpu", 10), DeviceError);
+    // Large meshes under auto do probe: the failure becomes the fallback's notice.
+    CHECK_FALSE(resolve_device_for_mesh("auto", kAutoGpuMinFaces).notice.empty());
+  }
+}
+
 TEST_CASE("resolve_device: ranking and auto fallback") {
   ScopedEnv no_default("MESHCVT_DEVICE", nullptr);
   const std::vector<DeviceInfo> mixed{

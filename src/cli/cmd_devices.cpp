@@ -75,8 +75,10 @@ void print_text(const std::vector<DeviceInfo>& devices, const std::vector<SelfTe
         std::printf("  self-test                  FAILED: %s\n", tests[i].error.c_str());
     }
   }
-  std::printf("\n--device auto: %s\n--device gpu:  %s\n", choice_text("auto", devices).c_str(),
-              choice_text("gpu", devices).c_str());
+  std::string automatic = choice_text("auto", devices);
+  if (automatic.rfind("gpu:", 0) == 0)
+    automatic += ", for meshes of " + std::to_string(kAutoGpuMinFaces) + " faces or more (smaller: cpu)";
+  std::printf("\n--device auto: %s\n--device gpu:  %s\n", automatic.c_str(), choice_text("gpu", devices).c_str());
 }
 
 void print_json(const std::vector<DeviceInfo>& devices, const std::vector<SelfTest>& tests) {

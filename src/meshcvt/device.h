@@ -72,6 +72,19 @@ struct DeviceChoice {
 ///   other   -> OptionError listing the accepted forms (naming $MESHCVT_DEVICE when it came from there).
 DeviceChoice resolve_device(const std::string& request);
 
+/// Meshes with fewer faces than this take the CPU engine under "auto", without loading Vulkan.
+/// Why: a GPU run pays about 0.15 s for the Vulkan instance and device before it saves anything,
+/// while the initialization runs on the CPU either way. Measured with 16 CPU threads against an
+/// H100 / H200 (bench/RESULTS.md, "GPU engine"): 75k faces -> 10k clusters 0.17 / 0.09 s on the
+/// CPU engine, 0.31 / 0.20 s on the GPU; 1.2M faces about even; 4.8M faces 2.41 / 1.40 s against
+/// 2.27 / 1.46 s. With fewer CPU cores the GPU gains more, from about the same size up.
+constexpr size_t kAutoGpuMinFaces = 1000000;
+
+/// resolve_device(request) for a mesh of `faces` faces: as there, except that "auto" (also from
+/// $MESHCVT_DEVICE or "") takes the CPU engine for fewer than kAutoGpuMinFaces faces without
+/// probing for devices. "gpu" and "gpu:N" are taken as asked, whatever the size.
+DeviceChoice resolve_device_for_mesh(const std::string& request, size_t faces);
+
 /// Same rule against a given device list (no Vulkan calls, except that "" still reads
 /// $MESHCVT_DEVICE). `devices` stands for the machine's list; used by `meshcvt devices` and tests.
 DeviceChoice resolve_device(const std::string& request, const std::vector<DeviceInfo>& devices);
