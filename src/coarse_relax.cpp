@@ -24,9 +24,16 @@
 // (tangent to the ring), only if its smallest angle grows and its cluster's corners stay within 1.5x
 // of their old largest distance to its triangles: what the worst triangles on creases and thin
 // parts need (fandisk, the elephant), without cutting features elsewhere.
-// So the mesh's smallest angle never drops below min(its old value, 35 deg). Only vertices on
-// their own cluster's faces move (a qem point off the surface keeps its offset), and only those
-// whose every edge has two consistently oriented triangles (boundaries keep their shape).
+// So the mesh's smallest angle never drops below min(its old value, 35 deg). Only vertices whose
+// every edge has two consistently oriented triangles move (boundaries keep their shape).
+// A vertex off its cluster's faces (a qem point, placed off a curved cluster on purpose) floats:
+// it is not taken back onto the faces, which would lose the offset that lowers the error; it
+// steps only along the free directions of its own cluster's normal tensor (the plane of a flat
+// cluster, the line of a crease cluster, nothing at a corner), where the cluster's quadric error
+// barely changes, and only while the largest distance from (up to kFloatErrorPoints of) its
+// cluster's corners to its triangles grows by at most kFloatErrorGrowth. (Until the sixteenth
+// session such points stayed where they were; then 130 of bunny00 -> 500's qem angles were below
+// 30 degrees, against ACVDQ's 7.)
 // Connectivity, orientation and the vertex count are never touched.
 //
 // Cost: a pass visits the vertices whose ring moved noticeably in the previous pass (all in the
@@ -87,6 +94,13 @@ constexpr double kOnSurface = 1e-4;
 // A move shorter than this fraction of the mean ring edge does not wake the neighbours for the
 // next pass: the tail of ever smaller moves would cost passes and change nothing visible.
 constexpr double kWakeFraction = 0.01;
+// A floating vertex's move may let the largest distance from its cluster's corners to its triangles
+// grow by this factor, judged on the corners of at most kFloatErrorPoints / 3 of its faces (evenly
+// taken). Measured with qem (sixteenth session): without the check fandisk -> 1000's RMS distance
+// rose 17%; with 1.0, bunny00 -> 500 kept 53 angles below 30 degrees instead of 33; 64 corners
+// instead of 24 cost the 1.2M bunny -> 10k 0.13 s more for the same numbers.
+constexpr double kFloatErrorGrowth = 1.2;
+constexpr size_t kFloatErrorPoints = 24;
 // Vertices (a few microseconds each) below which one thread does a class of the pass.
 constexpr size_t kMinParallelVertices = 64;
 
@@ -217,8 +231,10 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
         home[labels[f]] = uint32_t(f);
         walk_home[labels[f]] = 1;
       }
-  // Movable: every edge at the vertex has exactly two triangles using it in opposite directions,
-  // no triangle repeats the vertex, it has three or more triangles and its cluster has faces.
+  // Movable (1, or kFloating once the vertex is found off its cluster's faces): every edge at the
+  // vertex has exactly two triangles using it in opposite directions, no triangle repeats the
+  // vertex, it has three or more triangles and its cluster has faces.
+  constexpr uint8_t kFloating = 2;
   std::vector<uint8_t> movable(n, 0);
   {
     std::vector<uint32_t> after, before;  // per ring triangle of v: the corner after v, before v
@@ -264,11 +280,16 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       for (int d = 0; d < 3; ++d) out[d] = next_point[d];
     }
   };
-  // Only vertices on their cluster's faces move: a point placed off the surface on purpose (qem at
-  // a curved cluster) keeps the offset that lowers the error, which a move onto the faces would lose.
-  // (Each vertex reads the positions and writes its own home and movable flag: any split.)
+  // A point placed off the surface on purpose (qem at a curved cluster) floats (see the top). A
+  // walk stops early where a cluster folds back toward the point, so a point the walk leaves off
+  // the faces is measured against every face of its cluster before it floats: a point on them
+  // gets the face under it instead.
+  // (Each vertex reads the positions and writes its own home and movable flag; `seen` is marked
+  // and cleared only at the vertex's own cluster's faces: any split.)
+  std::vector<uint8_t> seen(faces, 0);
   WorkerPool pool(threads);
-  pool.run(n, [&](size_t first, size_t last, unsigned) {
+  std::vector<std::vector<uint32_t>> setup_flood(pool.size());
+  pool.run(n, [&](size_t first, size_t last, unsigned worker) {
     for (size_t v = first; v < last; ++v) {
       if (!movable[v]) continue;
       const double p[3] = {coarse.positions[3 * v], coarse.positions[3 * v + 1], coarse.positions[3 * v + 2]};
@@ -288,7 +309,32 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       if (closest_point_on_triangle(p, corner[0], corner[1], corner[2], onto) <= limit * limit) continue;
       project(uint32_t(v), p, home[v], onto);
       const double off = length(Vec3{onto[0] - p[0], onto[1] - p[1], onto[2] - p[2]});
-      if (!(off <= limit)) movable[v] = 0;
+      if (off <= limit) continue;
+      // Every face of the cluster (a flood from home), the nearest first in face order on ties.
+      std::vector<uint32_t>& flood = setup_flood[worker];
+      flood.assign(1, home[v]);
+      seen[home[v]] = 1;
+      double nearest = INFINITY;
+      uint32_t nearest_face = kNone;
+      for (size_t i = 0; i < flood.size(); ++i) {
+        const uint32_t g = flood[i];
+        for (int j = 0; j < 3; ++j)
+          for (int d = 0; d < 3; ++d) corner[j][d] = mesh.positions[3 * size_t(mesh.indices[3 * size_t(g) + j]) + d];
+        const double d2 = closest_point_on_triangle(p, corner[0], corner[1], corner[2], onto);
+        if (d2 < nearest || (d2 == nearest && g < nearest_face)) nearest = d2, nearest_face = g;
+        for (int e = 0; e < 3; ++e) {
+          const uint32_t h = topology.face_adjacent[3 * size_t(g) + e];
+          if (h != kNone && labels[h] == v && !seen[h]) {
+            seen[h] = 1;
+            flood.push_back(h);
+          }
+        }
+      }
+      for (uint32_t g : flood) seen[g] = 0;
+      if (nearest <= limit * limit)
+        home[v] = nearest_face;
+      else
+        movable[v] = kFloating;
     }
   }, kMinParallelVertices);
 
@@ -325,11 +371,6 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       if (color[v] != kNone) class_vertices[fill[color[v]]++] = v;
   }
 
-  // The corners of cluster c's faces (a flood from `start` over faces of c), for the rescue's
-  // error check. Repeated corners are harmless: only the largest distance is used.
-  // seen is shared by the workers: a flood marks only faces of its own cluster, and unmarks them
-  // when done (so a later flood of the same cluster, in the next pass, starts clean).
-  std::vector<uint8_t> seen(faces, 0);
   // A vertex's ring before its move, what its tried points are judged against (read_ring).
   struct RingBefore {
     uint32_t v, count;  // the vertex, its triangles
@@ -349,6 +390,10 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
     RingBefore before[kLanes];
     std::vector<Shape> new_shapes;  // per triangle at the vertex being moved, at the tried point
   };
+  // The corners of cluster c's faces (a flood from `start` over faces of c), for the rescue's
+  // error check. Repeated corners are harmless: only the largest distance is used.
+  // seen is shared by the workers: a flood marks only faces of its own cluster, and unmarks them
+  // when done (so a later flood of the same cluster, in the next pass, starts clean).
   auto gather = [&](uint32_t c, uint32_t start, Scratch& w) {
     w.cluster_points.clear();
     w.flood.assign(1, start);
@@ -391,6 +436,42 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
   };
 
   const double min_cos = std::cos(max_normal_turn_deg * std::numbers::pi / 180.0);
+  // For floating vertices: their clusters' normal tensors (sum of area * n n^T over the cluster's
+  // faces, 9 per vertex, row-major), whose free directions their steps take, and the corners their
+  // moves are checked against (CSR; the corners of every stride-th face of the cluster, in face
+  // order, at most kFloatErrorPoints: gathered once, not per visit).
+  std::vector<double> cluster_tensor;
+  std::vector<uint32_t> float_point_offsets;
+  std::vector<Vec3> float_points;
+  if (std::find(movable.begin(), movable.end(), kFloating) != movable.end()) {
+    cluster_tensor.assign(9 * n, 0.0);
+    std::vector<uint32_t> cluster_faces(n, 0), seen_faces(n, 0), stride(n, 1);
+    for (size_t f = 0; f < faces; ++f)
+      if (movable[labels[f]] == kFloating) ++cluster_faces[labels[f]];
+    float_point_offsets.assign(n + 1, 0);
+    for (size_t c = 0; c < n; ++c) {
+      const size_t wanted = kFloatErrorPoints / 3;
+      stride[c] = uint32_t(std::max<size_t>(1, (cluster_faces[c] + wanted - 1) / wanted));
+      float_point_offsets[c + 1] = float_point_offsets[c] + 3 * ((cluster_faces[c] + stride[c] - 1) / stride[c]);
+    }
+    float_points.resize(float_point_offsets[n]);
+    for (size_t f = 0; f < faces; ++f) {
+      const uint32_t c = labels[f];
+      if (movable[c] != kFloating) continue;
+      Vec3 q[3];
+      for (int j = 0; j < 3; ++j) q[j] = point_of(&mesh.positions[3 * size_t(mesh.indices[3 * f + j])]);
+      if (seen_faces[c]++ % stride[c] == 0) {
+        const size_t at = float_point_offsets[c] + 3 * ((seen_faces[c] - 1) / stride[c]);
+        for (int j = 0; j < 3; ++j) float_points[at + j] = q[j];
+      }
+      const Vec3 m = cross(q[1] - q[0], q[2] - q[0]);
+      const double l = length(m);
+      if (!(l > 0)) continue;
+      const double e[3] = {m.x / l, m.y / l, m.z / l};
+      for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k) cluster_tensor[9 * size_t(c) + 3 * i + k] += 0.5 * l * e[i] * e[k];
+    }
+  }
   std::vector<uint8_t> active = movable, next_active(n, 0);
   // Per vertex in this pass: 1 moved, 2 moved far enough to wake its ring for the next pass.
   std::vector<uint8_t> outcome(n, 0);
@@ -461,11 +542,16 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
     const bool rescue = old_min < kRescueTan;
     double old_q = 0;  // the ring's sum of Q before the move, once a tried point needs it
     bool have_old_q = false;
-    for (int attempt = 0; attempt < (rescue ? 2 : 1); ++attempt) {
+    const bool floating = movable[v] == kFloating;  // no rescue: its steps keep to its own cluster's features
+    for (int attempt = 0; attempt < (rescue && !floating ? 2 : 1); ++attempt) {
       const Vec3 step = attempt == 0 ? free_step : tangent_step;
       if (!(dot(step, step) > 0)) continue;
       double old_error = 0;
-      if (attempt == 1) {
+      if (floating) {
+        w.cluster_points.assign(float_points.begin() + float_point_offsets[v],
+                                float_points.begin() + float_point_offsets[v + 1]);
+        old_error = ring_error(v, p, w.cluster_points);
+      } else if (attempt == 1) {
         gather(v, home[v], w);
         old_error = ring_error(v, p, w.cluster_points);
       }
@@ -476,8 +562,8 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       for (double fraction : kStepFractions) {
         const double q[3] = {p.x + fraction * step.x, p.y + fraction * step.y, p.z + fraction * step.z};
         uint32_t face = home[v];
-        double onto[3];
-        project(v, q, face, onto);
+        double onto[3] = {q[0], q[1], q[2]};
+        if (!floating) project(v, q, face, onto);
         // Judged at the float position it will be stored as.
         const float stored[3] = {float(onto[0]), float(onto[1]), float(onto[2])};
         const Vec3 np = point_of(stored);
@@ -510,6 +596,7 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
         }
         // Across a feature the move must not take the ring farther from its cluster's points.
         if (attempt == 1 && ring_error(v, np, w.cluster_points) > kRescueErrorGrowth * old_error) continue;
+        if (floating && ring_error(v, np, w.cluster_points) > kFloatErrorGrowth * old_error) continue;
         for (int d = 0; d < 3; ++d) coarse.positions[3 * size_t(v) + d] = stored[d];
         home[v] = face;
         double edge_sum = 0;  // for the mean ring edge
@@ -525,7 +612,12 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
   // their moves. They share no triangle: no order among them changes anything.
   auto relax_vertices = [&](const uint32_t* vs, int lanes, Scratch& w) {
     double tensors[kLanes][3][3], values[kLanes][3], vectors[kLanes][3][3];
-    for (int lane = 0; lane < lanes; ++lane) read_ring(vs[lane], w.before[lane], tensors[lane]);
+    for (int lane = 0; lane < lanes; ++lane) {
+      read_ring(vs[lane], w.before[lane], tensors[lane]);
+      if (movable[vs[lane]] == kFloating)  // its cluster's free directions, not its ring's
+        for (int i = 0; i < 3; ++i)
+          for (int k = 0; k < 3; ++k) tensors[lane][i][k] = cluster_tensor[9 * size_t(vs[lane]) + 3 * i + k];
+    }
     symmetric_eigen3_lanes<kLanes>(lanes, tensors, values, vectors);
     for (int lane = 0; lane < lanes; ++lane) move_vertex(w.before[lane], values[lane], vectors[lane], w);
   };

@@ -192,8 +192,12 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg = 25, uint32_t ma
 /// and either it or the sum of the incident qualities Q (quality.h) grows. A vertex of a triangle
 /// below 33 deg may also step across a feature when that raises its smallest angle and keeps its
 /// cluster's corners within 1.5x of their old largest distance to its triangles. So the mesh's
-/// smallest angle never drops below min(its old value, 35 deg). Vertices off their cluster's faces
-/// (qem points placed off the surface), on a boundary or at a non-manifold edge stay. Passes visit
+/// smallest angle never drops below min(its old value, 35 deg). A vertex off its cluster's faces
+/// (a qem point placed off the surface) keeps its offset: it steps, by the same rules and not onto
+/// the faces, only along the free directions of its own cluster's normal tensor (plane, crease
+/// line, none at a corner), and only while its cluster's corners (up to 64 of them) stay within
+/// 1.2x of their old largest distance to its triangles. Vertices on a boundary or at a
+/// non-manifold edge stay. Passes visit
 /// the vertices whose ring moved in the previous pass, in classes of vertices that share no
 /// triangle (a greedy coloring in vertex order, deterministic), until none moves, at most `passes`.
 ///
@@ -203,8 +207,8 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg = 25, uint32_t ma
 /// topology : build_topology(mesh) (face adjacency for walking over a cluster).
 /// labels   : cluster per face of `mesh`, each below coarse.vertex_count().
 /// passes   : passes at most (0: nothing moves). max_normal_turn_deg: in [0, 180] degrees.
-/// Returns the number of moves kept. A moved vertex lies on its cluster's faces (to float
-/// rounding). Vertex count, topology and orientation are unchanged. Throws OptionError when the
+/// Returns the number of moves kept. A moved vertex that lay on its cluster's faces lies on them
+/// (to float rounding). Vertex count, topology and orientation are unchanged. Throws OptionError when the
 /// sizes disagree or an index is out of range. Time O(passes x vertices x a few walk steps) plus
 /// O(F) for the rescue's rare cluster scans. threads: 0 = one per core; vertices that share no
 /// triangle move side by side, in classes (a greedy coloring), so the result does not depend on it.
