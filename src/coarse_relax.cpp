@@ -22,7 +22,7 @@
 //     and either it grows or the sum of their qualities Q grows (Q as in quality.cpp).
 // A vertex of a triangle below 33 degrees that no such move helps may also step across a feature
 // (tangent to the ring), only if its smallest angle grows and its cluster's corners stay within 1.5x
-// of their old largest distance to its triangles: what the worst triangles on creases and thin
+// of their old largest squared distance to its triangles: what the worst triangles on creases and thin
 // parts need (fandisk, the elephant), without cutting features elsewhere.
 // So the mesh's smallest angle never drops below min(its old value, 35 deg). Only vertices whose
 // every edge has two consistently oriented triangles move (boundaries keep their shape).
@@ -30,8 +30,8 @@
 // it is not taken back onto the faces, which would lose the offset that lowers the error; it
 // steps only along the free directions of its own cluster's normal tensor (the plane of a flat
 // cluster, the line of a crease cluster, nothing at a corner), where the cluster's quadric error
-// barely changes, and only while the largest distance from (up to kFloatErrorPoints of) its
-// cluster's corners to its triangles grows by at most kFloatErrorGrowth. (Until the sixteenth
+// barely changes, and only while the largest squared distance from (up to kFloatErrorPoints of)
+// its cluster's corners to its triangles grows by at most kFloatErrorGrowth. (Until the sixteenth
 // session such points stayed where they were; then 130 of bunny00 -> 500's qem angles were below
 // 30 degrees, against ACVDQ's 7.)
 // Connectivity, orientation and the vertex count are never touched.
@@ -84,9 +84,10 @@ constexpr double kFreeEigenvalue = 0.05;
 const double kSafeTan = std::tan(35 * std::numbers::pi / 180);
 // A vertex whose incident triangles have an angle below this may also step across a feature.
 const double kRescueTan = std::tan(33 * std::numbers::pi / 180);
-// A rescue step (across a feature) may let the largest distance from its cluster's corners to the
-// vertex's triangles grow by this factor at most (measured: 1 blocks the elephant's worst triangle,
-// 1.5 keeps Hausdorff within 4% and RMS within 5% even for qem, whose points sit on features).
+// A rescue step (across a feature) may let the largest squared distance from its cluster's corners
+// to the vertex's triangles grow by this factor at most (measured: 1 blocks the elephant's worst
+// triangle, 1.5 keeps Hausdorff within 4% and RMS within 5% even for qem, whose points sit on
+// features).
 constexpr double kRescueErrorGrowth = 1.5;
 // A vertex farther than this fraction of its mean ring edge from its cluster's faces is off the
 // surface (float rounding of a point on a face is about 1e-7 of the coordinates).
@@ -94,9 +95,9 @@ constexpr double kOnSurface = 1e-4;
 // A move shorter than this fraction of the mean ring edge does not wake the neighbours for the
 // next pass: the tail of ever smaller moves would cost passes and change nothing visible.
 constexpr double kWakeFraction = 0.01;
-// A floating vertex's move may let the largest distance from its cluster's corners to its triangles
-// grow by this factor, judged on the corners of at most kFloatErrorPoints / 3 of its faces (evenly
-// taken). Measured with qem (sixteenth session): without the check fandisk -> 1000's RMS distance
+// A floating vertex's move may let the largest squared distance from its cluster's corners to its
+// triangles grow by this factor (the distance by about 9.5%), judged on the corners of at most
+// kFloatErrorPoints / 3 of its faces (evenly taken). Measured with qem (sixteenth session): without the check fandisk -> 1000's RMS distance
 // rose 17%; with 1.0, bunny00 -> 500 kept 53 angles below 30 degrees instead of 33; 64 corners
 // instead of 24 cost the 1.2M bunny -> 10k 0.13 s more for the same numbers.
 constexpr double kFloatErrorGrowth = 1.2;
@@ -310,18 +311,23 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       project(uint32_t(v), p, home[v], onto);
       const double off = length(Vec3{onto[0] - p[0], onto[1] - p[1], onto[2] - p[2]});
       if (off <= limit) continue;
-      // Every face of the cluster (a flood from home), the nearest first in face order on ties.
+      // Every face of the cluster (a flood from home) until one lies within the limit: it becomes
+      // home. A face whose plane is farther than the limit is passed without the full test.
       std::vector<uint32_t>& flood = setup_flood[worker];
       flood.assign(1, home[v]);
       seen[home[v]] = 1;
-      double nearest = INFINITY;
-      uint32_t nearest_face = kNone;
-      for (size_t i = 0; i < flood.size(); ++i) {
+      uint32_t under = kNone;
+      for (size_t i = 0; i < flood.size() && under == kNone; ++i) {
         const uint32_t g = flood[i];
         for (int j = 0; j < 3; ++j)
           for (int d = 0; d < 3; ++d) corner[j][d] = mesh.positions[3 * size_t(mesh.indices[3 * size_t(g) + j]) + d];
-        const double d2 = closest_point_on_triangle(p, corner[0], corner[1], corner[2], onto);
-        if (d2 < nearest || (d2 == nearest && g < nearest_face)) nearest = d2, nearest_face = g;
+        const Vec3 a = {corner[0][0], corner[0][1], corner[0][2]};
+        const Vec3 normal = cross(Vec3{corner[1][0], corner[1][1], corner[1][2]} - a,
+                                  Vec3{corner[2][0], corner[2][1], corner[2][2]} - a);
+        const double height = dot(Vec3{p[0], p[1], p[2]} - a, normal);
+        if (!(height * height > limit * limit * dot(normal, normal)) &&
+            closest_point_on_triangle(p, corner[0], corner[1], corner[2], onto) <= limit * limit)
+          under = g;
         for (int e = 0; e < 3; ++e) {
           const uint32_t h = topology.face_adjacent[3 * size_t(g) + e];
           if (h != kNone && labels[h] == v && !seen[h]) {
@@ -331,8 +337,8 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
         }
       }
       for (uint32_t g : flood) seen[g] = 0;
-      if (nearest <= limit * limit)
-        home[v] = nearest_face;
+      if (under != kNone)
+        home[v] = under;
       else
         movable[v] = kFloating;
     }
@@ -414,11 +420,13 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
     }
     for (uint32_t f : w.visited) seen[f] = 0;
   };
-  // The largest distance from the cluster's points to the triangles around v with v at `at`: how
-  // far the coarse mesh is from this part of the input, as far as v's move changes it.
-  auto ring_error = [&](uint32_t v, Vec3 at, const std::vector<Vec3>& cluster_points) {
+  // The largest squared distance from the cluster's points to the triangles around v with v at
+  // `at`: how far the coarse mesh is from this part of the input, as far as v's move changes it.
+  // Once it is above stop_above the rest is not measured (the move is refused whatever it is).
+  auto ring_error = [&](uint32_t v, Vec3 at, const std::vector<Vec3>& cluster_points, double stop_above) {
     double worst = 0;
     for (const Vec3& x : cluster_points) {
+      if (worst > stop_above) break;
       const double q[3] = {x.x, x.y, x.z};
       double nearest = INFINITY;
       for (uint32_t i = ring_offsets[v]; i < ring_offsets[v + 1] && nearest > worst; ++i) {
@@ -550,10 +558,10 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       if (floating) {
         w.cluster_points.assign(float_points.begin() + float_point_offsets[v],
                                 float_points.begin() + float_point_offsets[v + 1]);
-        old_error = ring_error(v, p, w.cluster_points);
+        old_error = ring_error(v, p, w.cluster_points, INFINITY);
       } else if (attempt == 1) {
         gather(v, home[v], w);
-        old_error = ring_error(v, p, w.cluster_points);
+        old_error = ring_error(v, p, w.cluster_points, INFINITY);
       }
       // A better point keeps the smallest angle at or above `floor` and lifts it or (along the
       // free directions only) the sum of Q; across a feature the floor is the old angle itself.
@@ -595,8 +603,10 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
           if (!(quality_sum(w.new_shapes, count) > old_q)) continue;
         }
         // Across a feature the move must not take the ring farther from its cluster's points.
-        if (attempt == 1 && ring_error(v, np, w.cluster_points) > kRescueErrorGrowth * old_error) continue;
-        if (floating && ring_error(v, np, w.cluster_points) > kFloatErrorGrowth * old_error) continue;
+        const double error_growth = attempt == 1 ? kRescueErrorGrowth : floating ? kFloatErrorGrowth : 0;
+        if (error_growth > 0 &&
+            ring_error(v, np, w.cluster_points, error_growth * old_error) > error_growth * old_error)
+          continue;
         for (int d = 0; d < 3; ++d) coarse.positions[3 * size_t(v) + d] = stored[d];
         home[v] = face;
         double edge_sum = 0;  // for the mean ring edge

@@ -191,15 +191,15 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg = 25, uint32_t ma
 /// max_normal_turn_deg degrees, the smallest incident angle stays >= min(its old value, 35 deg),
 /// and either it or the sum of the incident qualities Q (quality.h) grows. A vertex of a triangle
 /// below 33 deg may also step across a feature when that raises its smallest angle and keeps its
-/// cluster's corners within 1.5x of their old largest distance to its triangles. So the mesh's
-/// smallest angle never drops below min(its old value, 35 deg). A vertex off its cluster's faces
-/// (a qem point placed off the surface) keeps its offset: it steps, by the same rules and not onto
-/// the faces, only along the free directions of its own cluster's normal tensor (plane, crease
-/// line, none at a corner), and only while its cluster's corners (up to 64 of them) stay within
-/// 1.2x of their old largest distance to its triangles. Vertices on a boundary or at a
-/// non-manifold edge stay. Passes visit
-/// the vertices whose ring moved in the previous pass, in classes of vertices that share no
-/// triangle (a greedy coloring in vertex order, deterministic), until none moves, at most `passes`.
+/// cluster's corners within 1.5x of their old largest squared distance to its triangles. So the
+/// mesh's smallest angle never drops below min(its old value, 35 deg). A vertex off its cluster's
+/// faces (a qem point placed off the surface) keeps its offset: it steps, by the same rules and not
+/// onto the faces, only along the free directions of its own cluster's normal tensor (plane,
+/// crease line, none at a corner), and only while its cluster's corners (24 of them at most) stay
+/// within 1.2x of their old largest squared distance to its triangles. Vertices on a boundary or
+/// at a non-manifold edge stay. Passes visit the vertices whose ring moved in the previous pass,
+/// in classes of vertices that share no triangle (a greedy coloring in vertex order,
+/// deterministic), until none moves, at most `passes`.
 ///
 /// coarse   : the coarse mesh, vertex i standing for cluster i (as coarsen_clustering builds it);
 ///            positions (input units) are changed in place, triangles are not.
@@ -208,10 +208,11 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg = 25, uint32_t ma
 /// labels   : cluster per face of `mesh`, each below coarse.vertex_count().
 /// passes   : passes at most (0: nothing moves). max_normal_turn_deg: in [0, 180] degrees.
 /// Returns the number of moves kept. A moved vertex that lay on its cluster's faces lies on them
-/// (to float rounding). Vertex count, topology and orientation are unchanged. Throws OptionError when the
-/// sizes disagree or an index is out of range. Time O(passes x vertices x a few walk steps) plus
-/// O(F) for the rescue's rare cluster scans. threads: 0 = one per core; vertices that share no
-/// triangle move side by side, in classes (a greedy coloring), so the result does not depend on it.
+/// (to float rounding). Vertex count, topology and orientation are unchanged. Throws OptionError
+/// when the sizes disagree or an index is out of range. Time O(passes x vertices x a few walk
+/// steps) plus O(F) for the rescue's rare cluster scans and the floating vertices' clusters.
+/// threads: 0 = one per core; vertices that share no triangle move side by side, in classes (a
+/// greedy coloring), so the result does not depend on it.
 uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& topology,
                                const std::vector<uint32_t>& labels, uint32_t passes = 3,
                                double max_normal_turn_deg = 20, unsigned threads = 0);
