@@ -33,9 +33,9 @@
 //     they cost the bunnies far more angles below 30 degrees than they save distance, and raised
 //     Hausdorff distances), the result stays a manifold with the same orientation (c, d not joined
 //     already; u and v keep three edges; both new triangles face the side of the old ones), and
-//     the smaller smallest angle of the pair does not drop below min(its old value, 30 degrees),
-//     or, for a swap that removes at least 90% of the distance (an edge laid along a sharp crease),
-//     below min(its old value, 10 degrees).
+//     the smaller smallest angle of the pair does not drop below min(its old value,
+//     swap_min_angle_deg), or, for a swap that removes at least 90% of the distance (an edge laid
+//     along a sharp crease), below min(its old value, swap_min_angle_deg, 10 degrees).
 //     Swaps are tested one after the other in a fixed order, so the result is deterministic; after
 //     the first pass over the edges only edges with a vertex touched since are tested again.
 // Connectivity changes only through swaps: the vertex count, the boundary and the orientation stay.
@@ -61,13 +61,13 @@ namespace {
 constexpr size_t kSamplesPerVertex = 64;
 // A swap must lower its samples' squared distance by this fraction (see the top comment).
 constexpr double kSwapGain = 0.3;
-// ... and may not make its pair's smallest angle smaller than min(old, this). 30 since the
-// sixteenth session (10 before): at 10 qem's swaps left 248 of bunny00 -> 500's angles and 501 of
-// fandisk -> 1000's below 30 degrees (ACVDQ: 7 and 25) for RMS distances 11% and 7% lower; at 30
-// qem's RMS stays below ACVD's and ACVDQ's on every Table 1 row (bench/RESULTS.md).
-constexpr double kSwapAngleFloorDeg = 30;
+// ... and may not make its pair's smallest angle smaller than min(old, swap_min_angle_deg,
+// CoarsenOptions::fit_swap_min_angle_deg: 30 by default since the sixteenth session, 10 before):
+// at 10 qem's swaps left 248 of bunny00 -> 500's angles and 501 of fandisk -> 1000's below 30
+// degrees (ACVDQ: 7 and 25) for RMS distances 11% and 7% lower; at 30 qem's RMS stays below
+// ACVD's and ACVDQ's on every Table 1 row (bench/RESULTS.md).
 // A swap below that floor must lower its samples' squared distance by this fraction, and keep the
-// pair's smallest angle at or above min(old, kThinSwapAngleFloorDeg): on a sharp crease that the
+// pair's smallest angle at or above min(old, swap_min_angle_deg, kThinSwapAngleFloorDeg): on a sharp crease that the
 // other diagonal cut across, laying the edge along it removes nearly all the distance (a cube at
 // 60 vertices: 12-36x lower RMS with such swaps). Measured (sixteenth session): 0.75 instead of
 // 0.9 left 54 instead of 32 of bunny00 -> 500's angles below 30 degrees for 5% lower RMS.
@@ -190,7 +190,7 @@ struct Sample {
 namespace detail {
 
 FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t passes,
-                          bool swaps, unsigned threads) {
+                          bool swaps, double swap_min_angle_deg, unsigned threads) {
   FitCounts counts;
   const size_t n = coarse.vertex_count(), faces = mesh.face_count(), triangles = coarse.face_count();
   if (passes == 0 || n == 0 || triangles == 0 || labels.size() != faces) return counts;
@@ -308,8 +308,8 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
     }, kMinParallelSamples);
   };
 
-  const double angle_floor = kSwapAngleFloorDeg * std::numbers::pi / 180;
-  const double thin_floor = kThinSwapAngleFloorDeg * std::numbers::pi / 180;
+  const double angle_floor = swap_min_angle_deg * std::numbers::pi / 180;
+  const double thin_floor = std::min(swap_min_angle_deg, kThinSwapAngleFloorDeg) * std::numbers::pi / 180;
   std::vector<uint32_t> touched(n, 0);  // the swap pass (from 1) that last changed a vertex's fan
   std::vector<uint32_t> pair;
   std::vector<double> to_first, to_second;

@@ -21,9 +21,10 @@ struct FitCounts {
 /// coarse : the coarse mesh, one vertex per cluster (vertex c stands for cluster c); positions and
 ///          triangles change in place, the vertex count, boundary and orientation do not.
 /// mesh   : the input; labels[f] < coarse.vertex_count() is face f's cluster.
+/// swap_min_angle_deg: CoarsenOptions::fit_swap_min_angle_deg (checked by the caller).
 /// threads: 0 = one per core; the result does not depend on it (fixed-point sums, sequential
 ///          swaps).
 FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t passes,
-                          bool swaps, unsigned threads);
+                          bool swaps, double swap_min_angle_deg, unsigned threads);
 
 }  // namespace meshcvt::detail

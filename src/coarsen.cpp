@@ -1047,6 +1047,8 @@ CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<
 CoarsenResult coarsen_clustering(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
                                  uint32_t clusters, const CoarsenOptions& options,
                                  const std::vector<float>* face_weights) {
+  if (!(options.fit_swap_min_angle_deg >= 0 && options.fit_swap_min_angle_deg <= 60))
+    throw OptionError("coarsen: fit_swap_min_angle_deg must be within [0, 60] degrees");
   std::vector<uint32_t> vertex_faces;
   CoarsenResult result = run(mesh, topology, labels, clusters, options, face_weights, &vertex_faces);
   // Flips need a clean manifold dual: with defects, edges may have more than two triangles.
@@ -1060,7 +1062,8 @@ CoarsenResult coarsen_clustering(const Mesh& mesh, const Topology& topology, con
   }
   if (options.placement == VertexPlacement::qem && result.defects.empty()) {
     const detail::FitCounts fit =
-        detail::fit_coarse_mesh(result.mesh, mesh, labels, options.fit_passes, options.fit_swaps, options.threads);
+        detail::fit_coarse_mesh(result.mesh, mesh, labels, options.fit_passes, options.fit_swaps,
+                                options.fit_swap_min_angle_deg, options.threads);
     result.fitted_moves = fit.moves;
     result.swapped_edges = fit.swaps;
   }

@@ -843,6 +843,20 @@ TEST_CASE("coarsen: on a curved surface qem's edge swaps make no more thin trian
     CHECK(b.coarse.swapped_edges > 0);
     CHECK(approximation_error(b.coarse.mesh, elephant).rms < approximation_error(a.coarse.mesh, elephant).rms);
     CHECK(triangle_quality(b.coarse.mesh).angles_below_30 <= triangle_quality(a.coarse.mesh).angles_below_30);
+    // The old floor, asked for: more swaps, more thin triangles.
+    CoarsenOptions low_floor = swaps.coarsen;
+    low_floor.fit_swap_min_angle_deg = 10;
+    CoarsenResult c = coarsen_clustering(elephant, topology, b.clustering.labels, clusters, low_floor);
+    REQUIRE(c.defects.empty());
+    CHECK(c.swapped_edges > b.coarse.swapped_edges);
+    CHECK(triangle_quality(c.mesh).angles_below_30 > triangle_quality(b.coarse.mesh).angles_below_30);
+  }
+  for (double bad : {-1.0, 61.0, std::nan("")}) {
+    CoarsenOptions o;
+    o.placement = VertexPlacement::qem;
+    o.fit_swap_min_angle_deg = bad;
+    std::vector<uint32_t> labels(elephant.face_count(), 0);
+    CHECK_THROWS_AS(coarsen_clustering(elephant, topology, labels, 1, o), OptionError);
   }
 }
 

@@ -8,7 +8,9 @@
 # - without --subdivide, qem subdivides as ACVD does (20 faces per cluster: the elephant's 5558 faces
 #   for 300 vertices get one level, subdivision_levels 1 in the report); --subdivide 0 keeps the
 #   input as given, and `projected` does so by default;
-# - a bad --fit-passes exits 2 and writes nothing.
+# - --fit-swap-angle 10 (the swaps' floor before the sixteenth session) swaps more edges and leaves
+#   more angles below 30 degrees than the default 30, and the report says which floor ran;
+# - a bad --fit-passes or --fit-swap-angle exits 2 and writes nothing.
 # usage: coarsen_qem.sh /path/to/meshcvt /path/to/tests/data
 set -euo pipefail
 cli=$1
@@ -27,6 +29,7 @@ run swaps
 run moves --no-fit-swaps
 run none --fit-passes 0
 run raw --subdivide 0
+run low_floor --fit-swap-angle 10
 "$cli" coarsen "$data/elephant.off" -n 300 -o "$tmp/projected.off" --report "$tmp/projected.json" -q ||
   fail "coarsen (projected) failed"
 
@@ -43,6 +46,10 @@ assert levels == {"swaps": 1, "raw": 0, "projected": 0}, levels
 assert all(v["subdivision_levels"] == 1 for v in r.values()), "qem's default should subdivide"
 rms = {k: v["error"]["rms"] for k, v in r.items()}
 assert rms["swaps"] < rms["moves"] < rms["none"], rms
+low = json.load(open(f"{tmp}/low_floor.json"))
+assert r["swaps"]["fit_swap_min_angle_deg"] == 30 and low["fit_swap_min_angle_deg"] == 10, "floor not reported"
+assert low["swapped_edges"] > r["swaps"]["swapped_edges"], (low["swapped_edges"], r["swaps"]["swapped_edges"])
+assert low["quality"]["angles_below_30"] > r["swaps"]["quality"]["angles_below_30"], "floor 30 kept no angle"
 
 # The written default output, read back: OFF, triangles only.
 lines = [l.split() for l in open(f"{tmp}/swaps.off") if l.strip() and not l.startswith("#")]
@@ -67,4 +74,11 @@ if "$cli" coarsen "$data/elephant.off" -n 300 --vertex qem --fit-passes -1 -o "$
   fail "--fit-passes -1 accepted"
 fi
 [ ! -e "$tmp/bad.off" ] || fail "--fit-passes -1 wrote a file"
+for angle in -1 61 nan; do
+  rc=0
+  "$cli" coarsen "$data/elephant.off" -n 300 --vertex qem --fit-swap-angle "$angle" -o "$tmp/bad.off" 2>"$tmp/err" || rc=$?
+  [ "$rc" -eq 2 ] || fail "--fit-swap-angle $angle: exit $rc, not 2"
+  grep -q "fit-swap-angle" "$tmp/err" || fail "--fit-swap-angle $angle: message does not name the option: $(cat "$tmp/err")"
+  [ ! -e "$tmp/bad.off" ] || fail "--fit-swap-angle $angle wrote a file"
+done
 echo ok
