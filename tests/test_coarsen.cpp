@@ -857,6 +857,10 @@ TEST_CASE("coarsen: on a curved surface qem's edge swaps make no more thin trian
     o.fit_swap_min_angle_deg = bad;
     std::vector<uint32_t> labels(elephant.face_count(), 0);
     CHECK_THROWS_AS(coarsen_clustering(elephant, topology, labels, 1, o), OptionError);
+    CoarsenMeshOptions job;
+    job.cluster.clusters = 100;
+    job.coarsen = o;
+    CHECK_THROWS_AS(coarsen_mesh(elephant, topology, job), OptionError);
   }
 }
 
