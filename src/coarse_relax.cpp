@@ -56,6 +56,7 @@
 #include <cassert>
 #include <cmath>
 #include <numbers>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -97,9 +98,10 @@ constexpr double kOnSurface = 1e-4;
 constexpr double kWakeFraction = 0.01;
 // A floating vertex's move may let the largest squared distance from its cluster's corners to its
 // triangles grow by this factor (the distance by about 9.5%), judged on the corners of at most
-// kFloatErrorPoints / 3 of its faces (evenly taken). Measured with qem (sixteenth session): without the check fandisk -> 1000's RMS distance
-// rose 17%; with 1.0, bunny00 -> 500 kept 53 angles below 30 degrees instead of 33; 64 corners
-// instead of 24 cost the 1.2M bunny -> 10k 0.13 s more for the same numbers.
+// kFloatErrorPoints / 3 of its faces (evenly taken). Measured with qem (sixteenth session):
+// without the check fandisk -> 1000's RMS distance rose 17%; with 1.0, bunny00 -> 500 kept 53
+// angles below 30 degrees instead of 33; 64 corners instead of 24 cost the 1.2M bunny -> 10k
+// 0.13 s more for the same numbers.
 constexpr double kFloatErrorGrowth = 1.2;
 constexpr size_t kFloatErrorPoints = 24;
 // Vertices (a few microseconds each) below which one thread does a class of the pass.
@@ -423,7 +425,7 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
   // The largest squared distance from the cluster's points to the triangles around v with v at
   // `at`: how far the coarse mesh is from this part of the input, as far as v's move changes it.
   // Once it is above stop_above the rest is not measured (the move is refused whatever it is).
-  auto ring_error = [&](uint32_t v, Vec3 at, const std::vector<Vec3>& cluster_points, double stop_above) {
+  auto ring_error = [&](uint32_t v, Vec3 at, std::span<const Vec3> cluster_points, double stop_above) {
     double worst = 0;
     for (const Vec3& x : cluster_points) {
       if (worst > stop_above) break;
@@ -555,13 +557,15 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       const Vec3 step = attempt == 0 ? free_step : tangent_step;
       if (!(dot(step, step) > 0)) continue;
       double old_error = 0;
+      std::span<const Vec3> error_points;  // what the move's distance check measures from
       if (floating) {
-        w.cluster_points.assign(float_points.begin() + float_point_offsets[v],
-                                float_points.begin() + float_point_offsets[v + 1]);
-        old_error = ring_error(v, p, w.cluster_points, INFINITY);
+        error_points = std::span<const Vec3>(float_points).subspan(
+            float_point_offsets[v], float_point_offsets[v + 1] - float_point_offsets[v]);
+        old_error = ring_error(v, p, error_points, INFINITY);
       } else if (attempt == 1) {
         gather(v, home[v], w);
-        old_error = ring_error(v, p, w.cluster_points, INFINITY);
+        error_points = w.cluster_points;
+        old_error = ring_error(v, p, error_points, INFINITY);
       }
       // A better point keeps the smallest angle at or above `floor` and lifts it or (along the
       // free directions only) the sum of Q; across a feature the floor is the old angle itself.
@@ -605,7 +609,7 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
         // Across a feature the move must not take the ring farther from its cluster's points.
         const double error_growth = attempt == 1 ? kRescueErrorGrowth : floating ? kFloatErrorGrowth : 0;
         if (error_growth > 0 &&
-            ring_error(v, np, w.cluster_points, error_growth * old_error) > error_growth * old_error)
+            ring_error(v, np, error_points, error_growth * old_error) > error_growth * old_error)
           continue;
         for (int d = 0; d < 3; ++d) coarse.positions[3 * size_t(v) + d] = stored[d];
         home[v] = face;
