@@ -203,7 +203,8 @@ uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg = 25, uint32_t ma
 /// faces (a qem point placed off the surface) keeps its offset: it steps, by the same rules and not
 /// onto the faces, only along the free directions of its own cluster's normal tensor (plane,
 /// crease line, none at a corner), and only while its cluster's corners (24 of them at most) stay
-/// within 1.2x of their old largest squared distance to its triangles. Vertices on a boundary or
+/// within 1.2x (1.5x at a triangle below 33 deg) of their old largest squared distance to its
+/// triangles. Vertices on a boundary or
 /// at a non-manifold edge stay. Passes visit the vertices whose ring moved in the previous pass,
 /// in classes of vertices that share no triangle (a greedy coloring in vertex order,
 /// deterministic), until none moves, at most `passes`.
