@@ -91,8 +91,8 @@ struct CoarsenOptions {
   /// this), unless it removes at least 90% of the pair's squared distance (an edge laid along a
   /// sharp crease): then min(its old value, this, 10). 30 by default since the sixteenth session;
   /// 10, the floor before it, gives lower distances and many more thin triangles (bench/RESULTS.md,
-  /// "meshcvt against ACVD": bunny00 -> 500 RMS 0.138 against 0.160 % of the diagonal with 194
-  /// angles below 30 against 32; fandisk -> 1000 0.0205 against 0.0220 with 534 against 18).
+  /// "meshcvt against ACVD": bunny00 -> 500 RMS 0.138 against 0.159 % of the diagonal with 178
+  /// angles below 30 against 27; fandisk -> 1000 0.0202 against 0.0219 with 537 against 13).
   double fit_swap_min_angle_deg = 30;
 };
 
