@@ -61,16 +61,17 @@ namespace {
 constexpr size_t kSamplesPerVertex = 64;
 // A swap must lower its samples' squared distance by this fraction (see the top comment).
 constexpr double kSwapGain = 0.3;
-// ... and may not make its pair's smallest angle smaller than min(old, swap_min_angle_deg,
-// CoarsenOptions::fit_swap_min_angle_deg: 30 by default since the sixteenth session, 10 before):
-// at 10 qem's swaps left 248 of bunny00 -> 500's angles and 501 of fandisk -> 1000's below 30
-// degrees (ACVDQ: 7 and 25) for RMS distances 11% and 7% lower; at 30 qem's RMS stays below
-// ACVD's and ACVDQ's on every Table 1 row (bench/RESULTS.md).
+// ... and may not make its pair's smallest angle smaller than min(old, swap_min_angle_deg), the
+// floor CoarsenOptions::fit_swap_min_angle_deg gives: 30 by default since the sixteenth session,
+// 10 before. At 10 qem's swaps left 248 of bunny00 -> 500's angles and 501 of fandisk -> 1000's
+// below 30 degrees (ACVDQ: 7 and 25) for RMS distances 11% and 7% lower; at 30 qem's RMS stays
+// below ACVD's and ACVDQ's on every Table 1 row (bench/RESULTS.md).
 // A swap below that floor must lower its samples' squared distance by this fraction, and keep the
-// pair's smallest angle at or above min(old, swap_min_angle_deg, kThinSwapAngleFloorDeg): on a sharp crease that the
-// other diagonal cut across, laying the edge along it removes nearly all the distance (a cube at
-// 60 vertices: 12-36x lower RMS with such swaps). Measured (sixteenth session): 0.75 instead of
-// 0.9 left 54 instead of 32 of bunny00 -> 500's angles below 30 degrees for 5% lower RMS.
+// pair's smallest angle at or above min(old, swap_min_angle_deg, kThinSwapAngleFloorDeg): on a
+// sharp crease that the other diagonal cut across, laying the edge along it removes nearly all
+// the distance (a cube at 60 vertices: 12-36x lower RMS with such swaps). Measured (sixteenth
+// session): 0.75 instead of 0.9 left 54 instead of 32 of bunny00 -> 500's angles below 30
+// degrees for 5% lower RMS.
 constexpr double kThinSwapGain = 0.9;
 constexpr double kThinSwapAngleFloorDeg = 10;
 // Swap rounds stop after this many passes over the edges even if swaps remain (each swap lowers
