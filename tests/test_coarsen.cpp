@@ -763,6 +763,35 @@ TEST_CASE("coarsen: qem points of two flat clusters meeting at a crease lie on t
   }
 }
 
+TEST_CASE("coarsen: a qem point that a weak direction would take off its cluster stays over it") {
+  // One cluster: half of a slightly tapered tube (radius 1 + taper * z, z in [0, 2]), as a
+  // cluster around a bunny's ear or an elephant's leg. Every tangent plane of a cone passes
+  // through its apex, so the quadric's minimizer is the apex, 1 / taper below the cluster, and
+  // only the taper constrains the point along the axis (a weak eigenvalue). Clamped to the grown
+  // box the point would stand below the cluster's lower edge, where its coarse triangles fold
+  // over their neighbours. That direction is dropped: along the axis the point stays at the
+  // centroid's height, and across it where the other planes put it.
+  for (double taper : {0.02, 0.1, 0.2, 0.3}) {
+    CAPTURE(taper);
+    Labeled g = grid(8, 8, [](int, int) { return 0u; });
+    for (size_t v = 0; v < g.mesh.vertex_count(); ++v) {
+      float* p = &g.mesh.positions[3 * v];
+      const double angle = std::numbers::pi * p[0] / 8, z = p[1] / 4, radius = 1 + taper * z;
+      p[0] = float(radius * std::cos(angle));
+      p[1] = float(radius * std::sin(angle));
+      p[2] = float(z);
+    }
+    std::vector<float> q = place_cluster_vertices(g.mesh, g.labels, 1, VertexPlacement::qem);
+    std::vector<float> c = cluster_mass_centroids(g.mesh, g.labels, 1);
+    // (Clamped, the point stood at z = -0.33 to -0.41 from taper 0.1 on, 0.63 from the axis.)
+    CHECK(std::fabs(q[2] - c[2]) < 0.35);  // along the axis: over the cluster (z in [0, 2])
+    // Across it: the quadric's minimizer for half a circle's tangents, 4 / pi of the radius.
+    const double off_axis = std::hypot(q[0], q[1]), radius = 1 + taper * q[2];
+    CHECK(off_axis > 1.2 * radius);
+    CHECK(off_axis < 1.35 * radius);
+  }
+}
+
 TEST_CASE("coarsen: qem points pulled onto one line keep their own planes where they would make a flat triangle") {
   // An 8 x 6 grid folded up along x = 4. Floor: cluster 0 (y < 3), 1 (y > 3); wall: 2 (y < 2),
   // 3 (2 < y < 4), 4 (y > 4). The lent planes pull every point onto the crease line, so the
