@@ -191,7 +191,7 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("relax_max_normal_turn_deg", co.relax_max_normal_turn_deg).value("relaxed_moves", r.relaxed_moves)
         .value("fit_passes", a.fit_passes).value("fitted_moves", r.fitted_moves)
         .value("fit_swaps", co.fit_swaps).value("fit_swap_min_angle_deg", co.fit_swap_min_angle_deg)
-        .value("swapped_edges", r.swapped_edges);
+        .value("swapped_edges", r.swapped_edges).value("unfolded_vertices", r.unfolded_vertices);
     j.begin_array("defects");
     for (const DualDefect& d : r.defects)
       j.begin_object().value("kind", to_string(d.kind)).value("cluster", d.cluster).value("other", d.other).end_object();

@@ -41,10 +41,15 @@ enum class VertexPlacement {
   /// (Garland-Heckbert quadrics), plus 0.3 / 3 of the planes of the other clusters' faces at each
   /// of its border vertices (a crease along the border then pulls the point onto it). Directions the
   /// quadric does not constrain (eigenvalues below 1e-3 of the largest) are left at c_i, so a flat
-  /// cluster gives c_i and a corner gives the corner. Clamped toward c_i so it stays inside the
-  /// cluster's bounding box grown by 10% of its diagonal. A point within 1% of that diagonal of
-  /// another cluster's, or a corner of a flat dual triangle, keeps its own planes only. Then
-  /// CoarsenOptions::fit_passes.
+  /// cluster gives c_i and a corner gives the corner. A point that would leave the cluster's
+  /// bounding box grown by 10% of its diagonal drops its weakest direction while that is below 0.1
+  /// of the largest eigenvalue (a cluster around a tapered tube: the minimizer is the cone's apex),
+  /// then is clamped toward c_i to stay inside that box. A point within 1% of that diagonal of
+  /// another cluster's, or a corner of a flat dual triangle, keeps its own planes only. The corners
+  /// of a triangle that faces against the same triangle on the `projected` points (the qem points
+  /// turned it over) move toward their projected points: half, a quarter, then all the way, until
+  /// no triangle is turned over. Then CoarsenOptions::fit_passes, and the same unfolding again
+  /// for the triangles its edge swaps made.
   qem,
 };
 
@@ -152,6 +157,10 @@ struct CoarsenResult {
   uint64_t relaxed_moves = 0;          ///< vertex moves kept by relax_coarse_vertices (one vertex may move in several passes)
   uint64_t fitted_moves = 0;           ///< vertex moves of the fitting passes (CoarsenOptions::fit_passes, qem only)
   uint64_t swapped_edges = 0;          ///< edges swapped by the fitting (CoarsenOptions::fit_swaps, qem only)
+  /// qem only: vertices moved toward their projected points because their qem points turned a
+  /// triangle over (see VertexPlacement::qem), before relaxing and again after the fitting (a
+  /// vertex moved both times counts twice).
+  uint64_t unfolded_vertices = 0;
 };
 
 /// Builds the dual mesh of a face clustering.

@@ -10,6 +10,7 @@
 #   input as given, and `projected` does so by default;
 # - --fit-swap-angle 10 (the swaps' floor before the sixteenth session) swaps more edges and leaves
 #   more angles below 30 degrees than the default 30, and the report says which floor ran;
+# - the report counts the qem points moved to unfold triangles (unfolded_vertices; 0 for projected);
 # - a bad --fit-passes or --fit-swap-angle exits 2 and writes nothing.
 # usage: coarsen_qem.sh /path/to/meshcvt /path/to/tests/data
 set -euo pipefail
@@ -46,6 +47,10 @@ assert levels == {"swaps": 1, "raw": 0, "projected": 0}, levels
 assert all(v["subdivision_levels"] == 1 for v in r.values()), "qem's default should subdivide"
 rms = {k: v["error"]["rms"] for k, v in r.items()}
 assert rms["swaps"] < rms["moves"] < rms["none"], rms
+# The report says how many qem points were moved toward the surface to unfold a triangle.
+projected = json.load(open(f"{tmp}/projected.json"))
+assert all(isinstance(v["unfolded_vertices"], int) and v["unfolded_vertices"] >= 0 for v in r.values()), r
+assert projected["unfolded_vertices"] == 0, projected["unfolded_vertices"]
 low = json.load(open(f"{tmp}/low_floor.json"))
 assert r["swaps"]["fit_swap_min_angle_deg"] == 30 and low["fit_swap_min_angle_deg"] == 10, "floor not reported"
 assert low["swapped_edges"] > r["swaps"]["swapped_edges"], (low["swapped_edges"], r["swaps"]["swapped_edges"])
