@@ -46,6 +46,7 @@
 #include <vector>
 
 #include "coarse_fit.h"
+#include "meshcvt/error.h"
 #include "coarse_rings.h"
 #include "parallel.h"
 #include "triangle_bvh.h"
@@ -408,6 +409,13 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
     if (swaps) swap_edges();
   }
   return counts;
+}
+
+void check_fit_angles(const CoarsenOptions& options) {
+  if (!(options.fit_swap_min_angle_deg >= 0 && options.fit_swap_min_angle_deg <= 60))
+    throw OptionError("coarsen: fit_swap_min_angle_deg must be within [0, 60] degrees");
+  if (!(options.fit_min_angle_deg >= 0 && options.fit_min_angle_deg <= 60))
+    throw OptionError("coarsen: fit_min_angle_deg must be within [0, 60] degrees");
 }
 
 }  // namespace detail

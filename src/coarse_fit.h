@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "meshcvt/coarsen.h"
 #include "meshcvt/mesh.h"
 
 namespace meshcvt::detail {
@@ -26,5 +27,9 @@ struct FitCounts {
 ///          swaps).
 FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint32_t>& labels, uint32_t passes,
                           bool swaps, double swap_min_angle_deg, unsigned threads);
+
+/// Throws OptionError unless CoarsenOptions::fit_swap_min_angle_deg and fit_min_angle_deg are
+/// within [0, 60] degrees (coarsen_clustering, and coarsen_mesh before it clusters).
+void check_fit_angles(const CoarsenOptions& options);
 
 }  // namespace meshcvt::detail

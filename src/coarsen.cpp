@@ -44,6 +44,7 @@
 #include "meshcvt/coarsen.h"
 #include "meshcvt/error.h"
 #include "coarse_fit.h"
+#include "coarse_toward_surface.h"
 
 namespace meshcvt {
 
@@ -1047,80 +1048,23 @@ CoarsenResult run(const Mesh& mesh, const Topology& topology, const std::vector<
                     centroids);
 }
 
-// Whether triangle t of `coarse` faces against the same triangle with its corners at `surface`
-// (3 floats per vertex): its normal turned by more than 90 degrees. Computed in double from the
-// stored floats; a triangle without area at `surface` says nothing and is not turned.
-bool turned_over(const Mesh& coarse, size_t t, const std::vector<float>& surface) {
-  double n[2][3];
-  for (int s = 0; s < 2; ++s) {
-    const float* p = s == 0 ? coarse.positions.data() : surface.data();
-    const float* a = &p[3 * size_t(coarse.indices[3 * t])];
-    const float* b = &p[3 * size_t(coarse.indices[3 * t + 1])];
-    const float* c = &p[3 * size_t(coarse.indices[3 * t + 2])];
-    const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-    const double v[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
-    n[s][0] = u[1] * v[2] - u[2] * v[1];
-    n[s][1] = u[2] * v[0] - u[0] * v[2];
-    n[s][2] = u[0] * v[1] - u[1] * v[0];
-  }
-  return (n[0][0] * n[1][0] + n[0][1] * n[1][1]) + n[0][2] * n[1][2] < 0;
-}
-
-// qem only: a triangle that the qem points turned over (against the same triangle on the clusters'
-// projected points, which lie on the surface) folds the coarse mesh over its neighbours, and no
-// later step unfolds it: relax keeps each move's normal turn small, and the fitting follows the
-// input, which lies on both sides of a fold. Where qem points of neighbouring clusters cross on a
-// thin or creased part (fandisk -> 1000: a cap of angles 0.5, 1.4 and 178 degrees along a crease;
-// the 1.2M bunny -> 10k: 2 triangles facing against all three of their clusters), the corners of
-// each such triangle move toward their projected points, to half, a quarter, then all the way, in
-// rounds until none is turned over (at the projected points themselves a triangle faces as it
-// does there). Positions only: the coarse mesh's triangles stay. Returns the vertices moved.
-uint64_t unfold_qem_points(Mesh& coarse, const std::vector<float>& surface) {
-  constexpr double kShares[] = {0.5, 0.25, 0.0};  // of the way from the projected to the qem point
-  const size_t n = coarse.vertex_count();
-  assert(surface.size() == coarse.positions.size());
-  std::vector<float> qem;                 // the qem points, once a vertex moves
-  std::vector<uint8_t> pulls(n, 0);       // how often each vertex was moved (indexes kShares)
-  std::vector<uint8_t> moves_now(n, 0);
-  uint64_t moved = 0;
-  for (;;) {
-    bool any = false;
-    for (size_t t = 0; t < coarse.face_count(); ++t)
-      if (turned_over(coarse, t, surface))
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t v = coarse.indices[3 * t + k];
-          if (pulls[v] < std::size(kShares)) moves_now[v] = 1, any = true;
-        }
-    if (!any) return moved;
-    if (qem.empty()) qem = coarse.positions;
-    for (size_t v = 0; v < n; ++v) {
-      if (!moves_now[v]) continue;
-      moves_now[v] = 0;
-      moved += pulls[v] == 0;
-      const double share = kShares[pulls[v]++];
-      for (int d = 0; d < 3; ++d) {
-        const double from = surface[3 * v + d];
-        coarse.positions[3 * v + d] = float(from + share * (double(qem[3 * v + d]) - from));
-      }
-    }
-  }
-}
-
 }  // namespace
 
 CoarsenResult coarsen_clustering(const Mesh& mesh, const Topology& topology, const std::vector<uint32_t>& labels,
                                  uint32_t clusters, const CoarsenOptions& options,
                                  const std::vector<float>* face_weights) {
-  if (!(options.fit_swap_min_angle_deg >= 0 && options.fit_swap_min_angle_deg <= 60))
-    throw OptionError("coarsen: fit_swap_min_angle_deg must be within [0, 60] degrees");
+  detail::check_fit_angles(options);
   std::vector<uint32_t> vertex_faces;
   std::vector<double> centroids;
   CoarsenResult result = run(mesh, topology, labels, clusters, options, face_weights, &vertex_faces, &centroids);
-  std::vector<float> surface;  // qem: the projected points, against which unfolding measures
+  // qem: the clusters' projected points, on the surface, toward which qem points that fold or thin
+  // triangles move (coarse_toward_surface.cpp): first those whose triangles turned over, so that
+  // relax and the fitting start from a mesh without folds.
+  std::vector<float> surface;
   if (options.placement == VertexPlacement::qem && result.defects.empty()) {
     surface = detail::place_cluster_vertices(mesh, &topology, labels, clusters, VertexPlacement::projected,
                                              face_weights, {}, centroids, options.threads, nullptr, nullptr);
-    result.unfolded_vertices = unfold_qem_points(result.mesh, surface);
+    result.unfolded_vertices = detail::unfold_toward_surface(result.mesh, surface);
   }
   // Flips need a clean manifold dual: with defects, edges may have more than two triangles.
   if (options.flip_edges && result.defects.empty())
@@ -1139,7 +1083,9 @@ CoarsenResult coarsen_clustering(const Mesh& mesh, const Topology& topology, con
     result.swapped_edges = fit.swaps;
     // The fit's swaps keep each new pair facing the side of the old one, but a new triangle can
     // still face against itself on the projected points (the elephant of tests/data at 80).
-    result.unfolded_vertices += unfold_qem_points(result.mesh, surface);
+    result.unfolded_vertices += detail::unfold_toward_surface(result.mesh, surface);
+    if (options.fit_min_angle_deg > 0)
+      result.angle_floor_moves = detail::widen_toward_surface(result.mesh, surface, options.fit_min_angle_deg, mesh, labels);
   }
   return result;
 }

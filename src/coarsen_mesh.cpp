@@ -67,6 +67,7 @@
 
 #include "meshcvt/coarsen.h"
 #include "meshcvt/error.h"
+#include "coarse_fit.h"
 #include "symmetric_eigen3.h"
 
 namespace meshcvt {
@@ -1732,8 +1733,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
   if (!options.cluster.component_clusters.empty() || !options.cluster.initial_labels.empty())
     throw OptionError("coarsen_mesh sets component_clusters and initial_labels itself: leave them empty");
   // Options coarsen_clustering and relax would refuse, refused before the clustering's work.
-  if (!(options.coarsen.fit_swap_min_angle_deg >= 0 && options.coarsen.fit_swap_min_angle_deg <= 60))
-    throw OptionError("coarsen: fit_swap_min_angle_deg must be within [0, 60] degrees");
+  detail::check_fit_angles(options.coarsen);
   if (!(options.coarsen.relax_max_normal_turn_deg >= 0 && options.coarsen.relax_max_normal_turn_deg <= 180))
     throw OptionError("relax: the normal turn limit must be within [0, 180] degrees");
   const uint32_t n = options.cluster.clusters;

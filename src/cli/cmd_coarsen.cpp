@@ -31,6 +31,7 @@ struct CoarsenArgs {
   uint32_t relax_passes = CoarsenOptions{}.relax_passes;
   uint32_t fit_passes = CoarsenOptions{}.fit_passes;
   double fit_swap_angle = CoarsenOptions{}.fit_swap_min_angle_deg;
+  double fit_min_angle = CoarsenOptions{}.fit_min_angle_deg;
   unsigned threads = 0;
   bool quiet = false, no_weld = false, no_error = false, no_flips = false, no_fit_swaps = false;
   double gradation = 0;   ///< --gradation g: curvature-adaptive density (meshcvt/density.h); 0 = uniform
@@ -107,6 +108,9 @@ void run_coarsen(const CoarsenArgs& a) {
   if (!(a.fit_swap_angle >= 0 && a.fit_swap_angle <= 60))
     throw OptionError("--fit-swap-angle must be within [0, 60] degrees, not " + std::to_string(a.fit_swap_angle));
   co.fit_swap_min_angle_deg = a.fit_swap_angle;
+  if (!(a.fit_min_angle >= 0 && a.fit_min_angle <= 60))
+    throw OptionError("--fit-min-angle must be within [0, 60] degrees, not " + std::to_string(a.fit_min_angle));
+  co.fit_min_angle_deg = a.fit_min_angle;
 
   prepare_allocator(a.input);
   auto t0 = Clock::now();
@@ -191,7 +195,8 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("relax_max_normal_turn_deg", co.relax_max_normal_turn_deg).value("relaxed_moves", r.relaxed_moves)
         .value("fit_passes", a.fit_passes).value("fitted_moves", r.fitted_moves)
         .value("fit_swaps", co.fit_swaps).value("fit_swap_min_angle_deg", co.fit_swap_min_angle_deg)
-        .value("swapped_edges", r.swapped_edges).value("unfolded_vertices", r.unfolded_vertices);
+        .value("swapped_edges", r.swapped_edges).value("unfolded_vertices", r.unfolded_vertices)
+        .value("fit_min_angle_deg", co.fit_min_angle_deg).value("angle_floor_moves", r.angle_floor_moves);
     j.begin_array("defects");
     for (const DualDefect& d : r.defects)
       j.begin_object().value("kind", to_string(d.kind)).value("cluster", d.cluster).value("other", d.other).end_object();
@@ -277,6 +282,9 @@ const RegisterCommand reg(30, [](CLI::App& app) {
   sub->add_option("--fit-swap-angle", a->fit_swap_angle,
                   "with --vertex qem: degrees in [0, 60]; a swap may not make its triangles' smallest angle smaller "
                   "than this unless it removes 90% of their distance (default 30; 10: lower distance, thinner triangles)");
+  sub->add_option("--fit-min-angle", a->fit_min_angle,
+                  "with --vertex qem: degrees in [0, 60]; last, the corners of triangles with a smaller angle move "
+                  "part of the way back to the surface until it is reached, where that widens them (default 20; 0 = off)");
   sub->add_flag("--no-flips", a->no_flips, "keep the dual's triangles as built (no edge flips improving angles)");
   sub->add_flag("--no-weld", a->no_weld, "do not merge vertices with identical positions");
   sub->add_flag("--no-error", a->no_error, "skip measuring the distance to the input");

@@ -48,8 +48,8 @@ enum class VertexPlacement {
   /// another cluster's, or a corner of a flat dual triangle, keeps its own planes only. The corners
   /// of a triangle that faces against the same triangle on the `projected` points (the qem points
   /// turned it over) move toward their projected points: half, a quarter, then all the way, until
-  /// no triangle is turned over. Then CoarsenOptions::fit_passes, and the same unfolding again
-  /// for the triangles its edge swaps made.
+  /// no triangle is turned over. Then CoarsenOptions::fit_passes, the same unfolding again for the
+  /// triangles its edge swaps made, and CoarsenOptions::fit_min_angle_deg.
   qem,
 };
 
@@ -99,6 +99,16 @@ struct CoarsenOptions {
   /// "meshcvt against ACVD": bunny00 -> 500 RMS 0.138 against 0.159 % of the diagonal with 178
   /// angles below 30 against 27; fandisk -> 1000 0.0202 against 0.0219 with 537 against 13).
   double fit_swap_min_angle_deg = 30;
+  /// Degrees, in [0, 60]; 0 = off. Last, for `qem`: each corner of a triangle whose smallest angle
+  /// is below this moves toward its cluster's projected point (7/8, 3/4, 1/2, 1/4 of the way from
+  /// there, or onto it), as little as lifts its triangles' smallest angle to this, or else as far
+  /// as lifts it most; only where it rises, no triangle turns over and the squared distance from
+  /// the corners of its and its neighbours' clusters to their triangles stays within 1.1x of what
+  /// it was, so the mesh's smallest angle never drops and points held by a crease stay on it.
+  /// Default 20, from bench/RESULTS.md (seventeenth session): qem's smallest angle on the Table 1
+  /// meshes rose from 2.4-12.3 degrees to 18.3-20.2 (fandisk 9.6), RMS distance at most 0.5%
+  /// higher.
+  double fit_min_angle_deg = 20;
 };
 
 /// Something in a clustering that makes its dual mesh non-manifold or degenerate. `cluster`,
@@ -161,6 +171,9 @@ struct CoarsenResult {
   /// triangle over (see VertexPlacement::qem), before relaxing and again after the fitting (a
   /// vertex moved both times counts twice).
   uint64_t unfolded_vertices = 0;
+  /// qem only: vertex moves toward the projected points that lifted thin triangles
+  /// (CoarsenOptions::fit_min_angle_deg).
+  uint64_t angle_floor_moves = 0;
 };
 
 /// Builds the dual mesh of a face clustering.

@@ -11,7 +11,9 @@
 # - --fit-swap-angle 10 (the swaps' floor before the sixteenth session) swaps more edges and leaves
 #   more angles below 30 degrees than the default 30, and the report says which floor ran;
 # - the report counts the qem points moved to unfold triangles (unfolded_vertices; 0 for projected);
-# - a bad --fit-passes or --fit-swap-angle exits 2 and writes nothing.
+# - --fit-min-angle 0 turns the widening of thin triangles off (angle_floor_moves 0) and leaves
+#   the smallest angle no larger than the default 20 does; the report names the floor;
+# - a bad --fit-passes, --fit-swap-angle or --fit-min-angle exits 2 and writes nothing.
 # usage: coarsen_qem.sh /path/to/meshcvt /path/to/tests/data
 set -euo pipefail
 cli=$1
@@ -31,6 +33,7 @@ run moves --no-fit-swaps
 run none --fit-passes 0
 run raw --subdivide 0
 run low_floor --fit-swap-angle 10
+run no_widening --fit-min-angle 0
 "$cli" coarsen "$data/elephant.off" -n 300 -o "$tmp/projected.off" --report "$tmp/projected.json" -q ||
   fail "coarsen (projected) failed"
 
@@ -51,6 +54,11 @@ assert rms["swaps"] < rms["moves"] < rms["none"], rms
 projected = json.load(open(f"{tmp}/projected.json"))
 assert all(isinstance(v["unfolded_vertices"], int) and v["unfolded_vertices"] >= 0 for v in r.values()), r
 assert projected["unfolded_vertices"] == 0, projected["unfolded_vertices"]
+# Widening the thin triangles (--fit-min-angle, default 20) never lowers the smallest angle.
+off = json.load(open(f"{tmp}/no_widening.json"))
+assert r["swaps"]["fit_min_angle_deg"] == 20 and off["fit_min_angle_deg"] == 0, "angle floor not reported"
+assert off["angle_floor_moves"] == 0, off["angle_floor_moves"]
+assert r["swaps"]["quality"]["min_angle_deg"] >= off["quality"]["min_angle_deg"], (r["swaps"]["quality"], off["quality"])
 low = json.load(open(f"{tmp}/low_floor.json"))
 assert r["swaps"]["fit_swap_min_angle_deg"] == 30 and low["fit_swap_min_angle_deg"] == 10, "floor not reported"
 assert low["swapped_edges"] > r["swaps"]["swapped_edges"], (low["swapped_edges"], r["swaps"]["swapped_edges"])
@@ -79,11 +87,13 @@ if "$cli" coarsen "$data/elephant.off" -n 300 --vertex qem --fit-passes -1 -o "$
   fail "--fit-passes -1 accepted"
 fi
 [ ! -e "$tmp/bad.off" ] || fail "--fit-passes -1 wrote a file"
-for angle in -1 61 nan; do
-  rc=0
-  "$cli" coarsen "$data/elephant.off" -n 300 --vertex qem --fit-swap-angle "$angle" -o "$tmp/bad.off" 2>"$tmp/err" || rc=$?
-  [ "$rc" -eq 2 ] || fail "--fit-swap-angle $angle: exit $rc, not 2"
-  grep -q "fit-swap-angle" "$tmp/err" || fail "--fit-swap-angle $angle: message does not name the option: $(cat "$tmp/err")"
-  [ ! -e "$tmp/bad.off" ] || fail "--fit-swap-angle $angle wrote a file"
+for option in --fit-swap-angle --fit-min-angle; do
+  for angle in -1 61 nan; do
+    rc=0
+    "$cli" coarsen "$data/elephant.off" -n 300 --vertex qem "$option" "$angle" -o "$tmp/bad.off" 2>"$tmp/err" || rc=$?
+    [ "$rc" -eq 2 ] || fail "$option $angle: exit $rc, not 2"
+    grep -q -- "${option#--}" "$tmp/err" || fail "$option $angle: message does not name the option: $(cat "$tmp/err")"
+    [ ! -e "$tmp/bad.off" ] || fail "$option $angle wrote a file"
+  done
 done
 echo ok
