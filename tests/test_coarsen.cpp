@@ -915,6 +915,16 @@ size_t turned_over_triangles(const Mesh& coarse, const std::vector<float>& surfa
   return count;
 }
 
+// The whole job (coarsen_mesh) with `qem` placement, the other options at their defaults.
+CoarsenMeshResult coarsen_qem(const Mesh& mesh, const Topology& topology, uint32_t clusters) {
+  CoarsenMeshOptions job;
+  job.cluster.clusters = clusters;
+  job.coarsen.placement = VertexPlacement::qem;
+  CoarsenMeshResult r = coarsen_mesh(mesh, topology, job);
+  REQUIRE(!r.defects_remain);
+  return r;
+}
+
 TEST_CASE("coarsen: qem points never turn a coarse triangle over") {
   // On the elephant's legs, trunk and ears, neighbouring clusters' qem points can cross: the
   // triangle between them then faces against the same triangle on the clusters' projected points
@@ -926,19 +936,13 @@ TEST_CASE("coarsen: qem points never turn a coarse triangle over") {
   uint64_t unfolded = 0;
   for (uint32_t clusters : {30u, 80u, 100u, 250u}) {
     CAPTURE(clusters);
-    CoarsenMeshOptions job;
-    job.cluster.clusters = clusters;
-    job.coarsen.placement = VertexPlacement::qem;
-    CoarsenMeshResult r = coarsen_mesh(elephant, topology, job);
-    REQUIRE(!r.defects_remain);
+    CoarsenMeshResult r = coarsen_qem(elephant, topology, clusters);
     const std::vector<float> surface =
         place_cluster_vertices(elephant, r.clustering.labels, clusters, VertexPlacement::projected);
     CHECK(turned_over_triangles(r.coarse.mesh, surface) == 0);
     unfolded += r.coarse.unfolded_vertices;
     // Only qem moves points so.
-    CoarsenOptions projected = job.coarsen;
-    projected.placement = VertexPlacement::projected;
-    CHECK(coarsen_clustering(elephant, topology, r.clustering.labels, clusters, projected).unfolded_vertices == 0);
+    CHECK(coarsen_clustering(elephant, topology, r.clustering.labels, clusters).unfolded_vertices == 0);
   }
   CHECK(unfolded > 0);
 }
@@ -952,12 +956,9 @@ TEST_CASE("coarsen: qem's thin triangles widen toward the surface at little cost
   const Topology topology = build_topology(elephant);
   for (uint32_t clusters : {100u, 200u, 500u}) {
     CAPTURE(clusters);
-    CoarsenMeshOptions job;
-    job.cluster.clusters = clusters;
-    job.coarsen.placement = VertexPlacement::qem;
-    CoarsenMeshResult widened = coarsen_mesh(elephant, topology, job);
-    REQUIRE(!widened.defects_remain);
-    CoarsenOptions off = job.coarsen;
+    CoarsenMeshResult widened = coarsen_qem(elephant, topology, clusters);
+    CoarsenOptions off;
+    off.placement = VertexPlacement::qem;
     off.fit_min_angle_deg = 0;
     CoarsenResult thin = coarsen_clustering(elephant, topology, widened.clustering.labels, clusters, off);
     REQUIRE(thin.defects.empty());
