@@ -104,7 +104,8 @@ struct CoarsenOptions {
   /// there, or onto it), as little as lifts its triangles' smallest angle to this, or else as far
   /// as lifts it most; only where it rises, no triangle turns over and the squared distance from
   /// the corners of its and its neighbours' clusters to their triangles stays within 1.1x of what
-  /// it was, so the mesh's smallest angle never drops and points held by a crease stay on it.
+  /// it was when the pass first came to the vertex, so the mesh's smallest angle never drops and
+  /// points held by a crease stay on it.
   /// Default 20, from bench/RESULTS.md (seventeenth session): qem's smallest angle on the Table 1
   /// meshes rose from 2.4-12.3 degrees to 18.3-20.2 (fandisk 9.6), RMS distance at most 0.5%
   /// higher.
