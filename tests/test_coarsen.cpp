@@ -22,6 +22,7 @@
 #include "meshcvt/quality.h"
 #include "meshcvt/subdivide.h"
 #include "meshcvt/topology.h"
+#include "coarse_toward_surface.h"
 #include "triangle_bvh.h"
 
 using namespace meshcvt;
@@ -970,6 +971,35 @@ TEST_CASE("coarsen: qem's thin triangles widen toward the surface at little cost
     CHECK(after.angles_below_30 <= before.angles_below_30);
     CHECK(approximation_error(widened.coarse.mesh, elephant).rms < 1.03 * approximation_error(thin.mesh, elephant).rms);
   }
+}
+
+TEST_CASE("coarsen: a thin triangle between two points on one crease widens along the crease") {
+  // An 8 x 6 grid folded up along x = 4 (floor z = 0, wall x = 4). Clusters A (y < 3) and B
+  // (y > 3) hold the faces next to the crease on both sides, C the rest of the floor, D the rest of
+  // the wall. A's and B's points sit on the crease 0.2 apart, so the floor triangle (A, B, C) and
+  // the wall triangle (B, A, D) are needles of 4.6 degrees. Their surface points are where they
+  // stand, so going toward them changes nothing; along the crease (the one direction their
+  // triangles' normals leave free) they can move apart, staying on it.
+  Labeled g = grid(8, 6, [](int i, int j) { return i == 3 || i == 4 ? (j < 3 ? 0u : 1u) : i < 3 ? 2u : 3u; });
+  for (size_t v = 0; v < g.mesh.vertex_count(); ++v) {
+    float* p = &g.mesh.positions[3 * v];
+    if (p[0] > 4) p[2] = p[0] - 4, p[0] = 4;
+  }
+  Mesh coarse;
+  add_vertex(coarse, 4, 2.9, 0);  // A
+  add_vertex(coarse, 4, 3.1, 0);  // B
+  add_vertex(coarse, 1.5, 3, 0);  // C
+  add_vertex(coarse, 4, 3, 2.5);  // D
+  coarse.indices = {0, 1, 2, 1, 0, 3};
+  const std::vector<float> surface = coarse.positions;
+  REQUIRE(triangle_quality(coarse).min_angle_deg < 5);
+  CHECK(detail::widen_toward_surface(coarse, surface, 20, g.mesh, g.labels) > 0);
+  CHECK(triangle_quality(coarse).min_angle_deg >= 20);
+  for (int v : {0, 1}) {  // still on the crease
+    CHECK(coarse.positions[3 * v] == 4.0f);
+    CHECK(coarse.positions[3 * v + 2] == 0.0f);
+  }
+  CHECK(coarse.positions[4] - coarse.positions[1] > 0.4f);  // A and B apart along it
 }
 
 TEST_CASE("coarsen: qem asks for ACVD's input resolution, which a creased mesh of a dozen faces per cluster lacks") {
