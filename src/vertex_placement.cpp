@@ -427,11 +427,12 @@ void solve_quadric(const double q[9], const double bb[6], const double c[3], dou
       if (c[d] + step < lo) t = std::min(t, (lo - c[d]) / step);
     }
     t = std::max(t, 0.0);
-    // A point that would leave the box and owes that to a weak direction slid along a valley of the
-    // quadric (a curved cluster's faces nearly agree there): clamped, it stood at the box's edge,
-    // beside the cluster rather than over it, and its triangles folded over their neighbours
-    // (bunny00 -> 500: 4 coarse triangles facing against all three of their clusters). Without that
-    // direction the point stays over the cluster along it.
+    // A point that would leave the box while its solution takes a weak direction has most likely
+    // slid along a valley of the quadric (a curved cluster's faces nearly agree there): clamped, it
+    // stood at the box's edge, beside the cluster rather than over it, and its triangles folded
+    // over their neighbours (bunny00 -> 500: 4 coarse triangles facing against all three of their
+    // clusters). The weakest direction is dropped, and the point solved again: along it the point
+    // stays over the cluster; if it still leaves the box, the next weak one goes, then the clamp.
     if (t < 1 && weakest >= 0 && values[weakest] < kQemWeakEigenvalue * largest) {
       kept[weakest] = false;
       continue;
