@@ -26,6 +26,7 @@
 
 #include "coarse_rings.h"
 #include "symmetric_eigen3.h"
+#include "triangle_angle.h"
 #include "triangle_bvh.h"
 
 namespace meshcvt::detail {
@@ -71,11 +72,6 @@ double corner_angle(const float* o, const float* x, const float* y) {
   const double cross[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
   const double sine = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
   return std::atan2(sine, u[0] * w[0] + u[1] * w[1] + u[2] * w[2]);
-}
-
-// The smallest angle of the triangle (a, b, c) in radians.
-double smallest_angle(const float* a, const float* b, const float* c) {
-  return std::min({corner_angle(a, b, c), corner_angle(b, c, a), corner_angle(c, a, b)});
 }
 
 double triangle_smallest_angle(const Mesh& coarse, size_t t) {
