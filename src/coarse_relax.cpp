@@ -458,26 +458,15 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
   std::vector<uint32_t> float_point_offsets;
   std::vector<Vec3> float_points;
   if (std::find(movable.begin(), movable.end(), kFloating) != movable.end()) {
+    std::vector<uint8_t> floating(n, 0);
+    for (size_t c = 0; c < n; ++c) floating[c] = movable[c] == kFloating;
+    sample_cluster_corners(mesh, labels, n, kFloatErrorPoints, &floating, float_point_offsets, float_points);
     cluster_tensor.assign(9 * n, 0.0);
-    std::vector<uint32_t> cluster_faces(n, 0), seen_faces(n, 0), stride(n, 1);
-    for (size_t f = 0; f < faces; ++f)
-      if (movable[labels[f]] == kFloating) ++cluster_faces[labels[f]];
-    float_point_offsets.assign(n + 1, 0);
-    for (size_t c = 0; c < n; ++c) {
-      const size_t wanted = kFloatErrorPoints / 3;
-      stride[c] = uint32_t(std::max<size_t>(1, (cluster_faces[c] + wanted - 1) / wanted));
-      float_point_offsets[c + 1] = float_point_offsets[c] + 3 * ((cluster_faces[c] + stride[c] - 1) / stride[c]);
-    }
-    float_points.resize(float_point_offsets[n]);
     for (size_t f = 0; f < faces; ++f) {
       const uint32_t c = labels[f];
-      if (movable[c] != kFloating) continue;
+      if (!floating[c]) continue;
       Vec3 q[3];
       for (int j = 0; j < 3; ++j) q[j] = point_of(&mesh.positions[3 * size_t(mesh.indices[3 * f + j])]);
-      if (seen_faces[c]++ % stride[c] == 0) {
-        const size_t at = float_point_offsets[c] + 3 * ((seen_faces[c] - 1) / stride[c]);
-        for (int j = 0; j < 3; ++j) float_points[at + j] = q[j];
-      }
       const Vec3 m = cross(q[1] - q[0], q[2] - q[0]);
       const double l = length(m);
       if (!(l > 0)) continue;

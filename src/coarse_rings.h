@@ -2,10 +2,12 @@
 // vertices (coarse_relax.cpp, coarse_fit.cpp). Internal, not public API.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
 #include "meshcvt/mesh.h"
+#include "vec3.h"
 
 namespace meshcvt {
 
@@ -20,6 +22,31 @@ inline void coarse_triangle_rings(const Mesh& coarse, std::vector<uint32_t>& off
   std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
   for (size_t t = 0; t < triangles; ++t)
     for (int k = 0; k < 3; ++k) ring[fill[coarse.indices[3 * t + k]]++] = uint32_t(t);
+}
+
+// Up to max_corners corners of the faces of each cluster c with wanted[c] != 0 (every cluster when
+// `wanted` is null), CSR: those of every stride-th face of c in face order, stride = ceil(faces of
+// c / (max_corners / 3)), so they spread over the cluster. What the moves of a coarse vertex
+// measure the distance to the input from (coarse_relax.cpp, coarse_toward_surface.cpp).
+inline void sample_cluster_corners(const Mesh& mesh, const std::vector<uint32_t>& labels, size_t clusters,
+                                   size_t max_corners, const std::vector<uint8_t>* wanted,
+                                   std::vector<uint32_t>& offsets, std::vector<Vec3>& corners) {
+  const size_t wanted_faces = std::max<size_t>(1, max_corners / 3);
+  std::vector<uint32_t> faces(clusters, 0), stride(clusters, 1), seen(clusters, 0);
+  for (uint32_t c : labels)
+    if (!wanted || (*wanted)[c]) ++faces[c];
+  offsets.assign(clusters + 1, 0);
+  for (size_t c = 0; c < clusters; ++c) {
+    stride[c] = uint32_t(std::max<size_t>(1, (faces[c] + wanted_faces - 1) / wanted_faces));
+    offsets[c + 1] = offsets[c] + 3 * ((faces[c] + stride[c] - 1) / stride[c]);
+  }
+  corners.resize(offsets[clusters]);
+  for (size_t f = 0; f < labels.size(); ++f) {
+    const uint32_t c = labels[f];
+    if ((wanted && !(*wanted)[c]) || seen[c]++ % stride[c] != 0) continue;
+    const size_t at = offsets[c] + 3 * ((seen[c] - 1) / stride[c]);
+    for (int k = 0; k < 3; ++k) corners[at + k] = mesh_vertex(mesh, mesh.indices[3 * f + k]);
+  }
 }
 
 }  // namespace meshcvt

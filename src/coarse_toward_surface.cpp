@@ -149,21 +149,9 @@ uint64_t widen_toward_surface(Mesh& coarse, const std::vector<float>& surface, d
   std::vector<uint32_t> offsets, ring;
   coarse_triangle_rings(coarse, offsets, ring);
   // Each cluster's corners for the distance check (kErrorCorners).
-  std::vector<uint32_t> cluster_faces(n, 0), corner_offsets(n + 1, 0), stride(n, 1), seen(n, 0);
-  for (uint32_t c : labels) ++cluster_faces[c];
-  for (size_t c = 0; c < n; ++c) {
-    const size_t wanted = kErrorCorners / 3;
-    stride[c] = uint32_t(std::max<size_t>(1, (cluster_faces[c] + wanted - 1) / wanted));
-    corner_offsets[c + 1] = corner_offsets[c] + 3 * ((cluster_faces[c] + stride[c] - 1) / stride[c]);
-  }
-  std::vector<double> corners(3 * size_t(corner_offsets[n]));
-  for (size_t f = 0; f < labels.size(); ++f) {
-    const uint32_t c = labels[f];
-    if (seen[c]++ % stride[c] != 0) continue;
-    const size_t at = corner_offsets[c] + 3 * ((seen[c] - 1) / stride[c]);
-    for (int k = 0; k < 3; ++k)
-      for (int d = 0; d < 3; ++d) corners[3 * (at + k) + d] = mesh.positions[3 * size_t(mesh.indices[3 * f + k]) + d];
-  }
+  std::vector<uint32_t> corner_offsets;
+  std::vector<Vec3> corners;
+  sample_cluster_corners(mesh, labels, n, kErrorCorners, nullptr, corner_offsets, corners);
   // The sum of squared distances from the corners of cluster w to the nearest of w's triangles.
   auto cluster_error = [&](uint32_t w) {
     double sum = 0;
@@ -173,7 +161,8 @@ uint64_t widen_toward_surface(Mesh& coarse, const std::vector<float>& surface, d
         double tri[3][3], point[3];
         for (int k = 0; k < 3; ++k)
           for (int d = 0; d < 3; ++d) tri[k][d] = coarse.positions[3 * size_t(coarse.indices[3 * size_t(ring[j]) + k]) + d];
-        nearest = std::min(nearest, closest_point_on_triangle(&corners[3 * size_t(i)], tri[0], tri[1], tri[2], point));
+        const double x[3] = {corners[i].x, corners[i].y, corners[i].z};
+        nearest = std::min(nearest, closest_point_on_triangle(x, tri[0], tri[1], tri[2], point));
       }
       sum += nearest;
     }
