@@ -1,5 +1,6 @@
-// meshcvt: the triangles around each vertex of a coarse mesh, shared by the passes that move its
-// vertices (coarse_relax.cpp, coarse_fit.cpp). Internal, not public API.
+// meshcvt: the triangles around each vertex of a coarse mesh, and sampled corners of each cluster,
+// shared by the passes that move its vertices (coarse_relax.cpp, coarse_fit.cpp,
+// coarse_toward_surface.cpp). Internal, not public API.
 #pragma once
 
 #include <algorithm>

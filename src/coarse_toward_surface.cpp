@@ -146,6 +146,10 @@ uint64_t widen_toward_surface(Mesh& coarse, const std::vector<float>& surface, d
   assert(surface.size() == coarse.positions.size() && min_angle_deg > 0);
   const double floor = min_angle_deg * std::numbers::pi / 180;
   const size_t n = coarse.vertex_count();
+  // Nothing to widen (the sphere, most of the time): no rings, no pass over the input's labels.
+  bool any_thin = false;
+  for (size_t t = 0; t < coarse.face_count() && !any_thin; ++t) any_thin = triangle_smallest_angle(coarse, t) < floor;
+  if (!any_thin) return 0;
   std::vector<uint32_t> offsets, ring;
   coarse_triangle_rings(coarse, offsets, ring);
   // Each cluster's corners for the distance check (kErrorCorners).

@@ -25,8 +25,9 @@ uint64_t unfold_toward_surface(Mesh& coarse, const std::vector<float>& surface);
 /// Moves each corner of a triangle whose smallest angle is below `min_angle_deg` (degrees, > 0)
 /// toward its surface point, as little as lifts its triangles' smallest angle to the floor, or
 /// else as far as lifts it most, never turning a triangle over nor taking its neighbourhood more
-/// than 10% (in squared distance) farther from the input (see the .cpp). The mesh's smallest angle
-/// never drops.
+/// than 10% (in squared distance) farther from the input; on a crease it may instead step along
+/// the crease, adding no angle below 30 degrees (see the .cpp). The mesh's smallest angle never
+/// drops.
 /// mesh, labels: the input and its clustering (labels[f] < coarse.vertex_count()), whose faces'
 ///               corners the distance is measured from.
 /// Returns the moves made.
