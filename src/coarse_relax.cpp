@@ -401,6 +401,7 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
     std::vector<Vec3> cluster_points;
     RingBefore before[kLanes];
     std::vector<Shape> new_shapes;  // per triangle at the vertex being moved, at the tried point
+    std::vector<double> ring_corners;  // ring_error's
   };
   // The corners of cluster c's faces (a flood from `start` over faces of c), for the rescue's
   // error check. Repeated corners are harmless: only the largest distance is used.
@@ -429,21 +430,37 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
   // The largest squared distance from the cluster's points to the triangles around v with v at
   // `at`: how far the coarse mesh is from this part of the input, as far as v's move changes it.
   // Once it is above stop_above the rest is not measured (the move is refused whatever it is).
-  auto ring_error = [&](uint32_t v, Vec3 at, std::span<const Vec3> cluster_points, double stop_above) {
+  auto ring_error = [&](uint32_t v, Vec3 at, std::span<const Vec3> cluster_points, double stop_above,
+                        std::vector<double>& corners) {
+    // The ring's corners with v at `at`, read once (9 per triangle).
+    const uint32_t count = ring_offsets[v + 1] - ring_offsets[v];
+    corners.resize(9 * size_t(count));
+    for (uint32_t i = 0; i < count; ++i) {
+      const uint32_t* tri = &coarse.indices[3 * size_t(ring[ring_offsets[v] + i])];
+      for (int j = 0; j < 3; ++j) {
+        const Vec3 y = tri[j] == v ? at : point_of(&coarse.positions[3 * size_t(tri[j])]);
+        corners[9 * i + 3 * j] = y.x, corners[9 * i + 3 * j + 1] = y.y, corners[9 * i + 3 * j + 2] = y.z;
+      }
+    }
+    // A point's scan over the ring starts at the triangle nearest the previous point (the points
+    // come face by face, neighbours mostly nearest the same triangle) and ends once the point is
+    // within `worst`: whether it is, and its distance when it is not, do not depend on the order
+    // (the 1.2M bunny -> 10k with qem: 5.7M closest-point tests in ring order).
     double worst = 0;
+    uint32_t start = 0;
     for (const Vec3& x : cluster_points) {
       if (worst > stop_above) break;
       const double q[3] = {x.x, x.y, x.z};
       double nearest = INFINITY;
-      for (uint32_t i = ring_offsets[v]; i < ring_offsets[v + 1] && nearest > worst; ++i) {
-        const uint32_t* tri = &coarse.indices[3 * size_t(ring[i])];
-        double corner[3][3], point[3];
-        for (int j = 0; j < 3; ++j) {
-          const Vec3 y = tri[j] == v ? at : point_of(&coarse.positions[3 * size_t(tri[j])]);
-          corner[j][0] = y.x, corner[j][1] = y.y, corner[j][2] = y.z;
-        }
-        nearest = std::min(nearest, closest_point_on_triangle(q, corner[0], corner[1], corner[2], point));
+      uint32_t hit = start;
+      for (uint32_t k = 0; k < count && nearest > worst; ++k) {
+        const uint32_t i = start + k < count ? start + k : start + k - count;
+        const double* c = &corners[9 * size_t(i)];
+        double point[3];
+        const double d2 = closest_point_on_triangle(q, c, c + 3, c + 6, point);
+        if (d2 < nearest) nearest = d2, hit = i;
       }
+      start = hit;
       worst = std::max(worst, nearest);
     }
     return worst;
@@ -554,11 +571,11 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
       if (floating) {
         error_points = std::span<const Vec3>(float_points).subspan(
             float_point_offsets[v], float_point_offsets[v + 1] - float_point_offsets[v]);
-        old_error = ring_error(v, p, error_points, INFINITY);
+        old_error = ring_error(v, p, error_points, INFINITY, w.ring_corners);
       } else if (attempt == 1) {
         gather(v, home[v], w);
         error_points = w.cluster_points;
-        old_error = ring_error(v, p, error_points, INFINITY);
+        old_error = ring_error(v, p, error_points, INFINITY, w.ring_corners);
       }
       // A better point keeps the smallest angle at or above `floor` and lifts it or (along the
       // free directions only) the sum of Q; across a feature the floor is the old angle itself.
@@ -605,7 +622,7 @@ uint64_t relax_coarse_vertices(Mesh& coarse, const Mesh& mesh, const Topology& t
                                     : floating                          ? kFloatErrorGrowth
                                                                         : 0;
         if (error_growth > 0 &&
-            ring_error(v, np, error_points, error_growth * old_error) > error_growth * old_error)
+            ring_error(v, np, error_points, error_growth * old_error, w.ring_corners) > error_growth * old_error)
           continue;
         for (int d = 0; d < 3; ++d) coarse.positions[3 * size_t(v) + d] = stored[d];
         home[v] = face;
