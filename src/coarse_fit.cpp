@@ -113,8 +113,8 @@ void corners(const Mesh& coarse, uint32_t triangle, double t[3][3]) {
     for (int d = 0; d < 3; ++d) t[j][d] = coarse.positions[3 * size_t(coarse.indices[3 * size_t(triangle) + j]) + d];
 }
 
-double distance2_to(const Mesh& coarse, uint32_t triangle, const double x[3]) {
-  double t[3][3], point[3];
+double closest_point_to(const Mesh& coarse, uint32_t triangle, const double x[3], double point[3]) {
+  double t[3][3];
   corners(coarse, triangle, t);
   return closest_point_on_triangle(x, t[0], t[1], t[2], point);
 }
@@ -182,9 +182,62 @@ struct HalfEdges {
 
 struct Sample {
   double x[3];
-  double weight;  // a third of its face's area
-  double d2;      // squared distance to its owner
+  double weight;    // a third of its face's area
+  double d2;        // squared distance to its owner
+  double point[3];  // its closest point on its owner, at the positions it was measured at
   uint32_t owner;
+};
+
+// Three planes per coarse triangle, one through each edge, perpendicular to the triangle and
+// facing away from it: the triangle lies on the inner side of all three, so a point's distance to
+// it is at least the point's largest distance beyond them. The owner searches use that bound to
+// skip the closest-point test of a triangle that cannot be nearer than one already measured:
+// most samples lie well inside their owner's prism, away from its neighbours (the 1.2M bunny ->
+// 10k with qem: 0.25M of 6.5M neighbour tests are left in the three owner updates, 0.8M of 4.3M
+// in the first owner search; the updates took 47 ms a pass). The skip is exact: a triangle is
+// passed over only when its bound exceeds the best distance by `tolerance`, a billionth of the
+// mesh's scale, far above the rounding of either number, so the owners are those the full tests
+// find.
+class TrianglePrisms {
+ public:
+  explicit TrianglePrisms(double tolerance) : tolerance_(tolerance) {}
+
+  // The planes of every triangle of `coarse` at its current positions. A degenerate triangle
+  // gets zero planes (bound 0: always tested).
+  void build(const Mesh& coarse) {
+    const size_t triangles = coarse.face_count();
+    planes_.assign(12 * triangles, 0.0);
+    for (size_t t = 0; t < triangles; ++t) {
+      const Vec3 p[3] = {mesh_vertex(coarse, coarse.indices[3 * t]), mesh_vertex(coarse, coarse.indices[3 * t + 1]),
+                         mesh_vertex(coarse, coarse.indices[3 * t + 2])};
+      const Vec3 normal = cross(p[1] - p[0], p[2] - p[0]);
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 out = cross(p[(k + 1) % 3] - p[k], normal);  // in the plane, away from the third corner
+        const double l = length(out);
+        if (!(l > 0) || !std::isfinite(l)) {
+          std::fill(&planes_[12 * t], &planes_[12 * t + 12], 0.0);
+          break;
+        }
+        const Vec3 m = (1 / l) * out;
+        double* plane = &planes_[12 * t + 4 * k];
+        plane[0] = m.x, plane[1] = m.y, plane[2] = m.z, plane[3] = dot(m, p[k]);
+      }
+    }
+  }
+
+  // Whether triangle t is certainly farther from x than squared distance d2.
+  bool farther(uint32_t t, const double x[3], double d2) const {
+    const double* plane = &planes_[12 * size_t(t)];
+    double beyond = 0;
+    for (int k = 0; k < 3; ++k, plane += 4)
+      beyond = std::max(beyond, (plane[0] * x[0] + plane[1] * x[1]) + plane[2] * x[2] - plane[3]);
+    const double bound = beyond - tolerance_;
+    return bound > 0 && bound * bound > d2;
+  }
+
+ private:
+  double tolerance_;
+  std::vector<double> planes_;  // per triangle, per edge: unit normal and offset
 };
 
 }  // namespace
@@ -234,19 +287,42 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
       for (int d = 0; d < 3; ++d) s.x[d] = (4 * p[k][d] + p[(k + 1) % 3][d] + p[(k + 2) % 3][d]) / 6;
       s.weight = area / 3;
       s.d2 = INFINITY;
+      s.point[0] = s.point[1] = s.point[2] = 0;
       s.owner = c;  // the cluster, until the owners are found
       samples.push_back(s);
     }
   }
   WorkerPool pool(threads);
-  // The closest of the triangles around the cluster's vertex (ties: the first in the ring).
+  double scale = diagonal;  // of the coordinates, for the prisms' tolerance
+  for (int d = 0; d < 3; ++d) scale = std::max({scale, std::fabs(lo[d]), std::fabs(hi[d])});
+  TrianglePrisms prisms(1e-9 * scale);
+  prisms.build(coarse);
+  // The closest of the triangles around the cluster's vertex (ties: the first in the ring). The
+  // first whose prism holds the sample is measured first; then, in ring order, the others that
+  // could be nearer.
   pool.run(samples.size(), [&](size_t first, size_t last, unsigned) {
     for (size_t i = first; i < last; ++i) {
       Sample& s = samples[i];
       const uint32_t c = s.owner;
+      uint32_t guess = kNone;
+      for (uint32_t r = ring_offsets[c]; r < ring_offsets[c + 1] && guess == kNone; ++r)
+        if (!prisms.farther(ring[r], s.x, 0)) guess = r;
+      if (guess == kNone) guess = ring_offsets[c];
+      double guess_point[3];
+      const double guess_d2 = closest_point_to(coarse, ring[guess], s.x, guess_point);
       for (uint32_t r = ring_offsets[c]; r < ring_offsets[c + 1]; ++r) {
-        const double d2 = distance2_to(coarse, ring[r], s.x);
-        if (d2 < s.d2) s.d2 = d2, s.owner = ring[r];
+        double d2, point[3];
+        if (r == guess) {
+          d2 = guess_d2;
+          for (int d = 0; d < 3; ++d) point[d] = guess_point[d];
+        } else {
+          if (prisms.farther(ring[r], s.x, guess_d2)) continue;
+          d2 = closest_point_to(coarse, ring[r], s.x, point);
+        }
+        if (d2 < s.d2) {
+          s.d2 = d2, s.owner = ring[r];
+          for (int d = 0; d < 3; ++d) s.point[d] = point[d];
+        }
       }
     }
   }, kMinParallelSamples);
@@ -266,9 +342,9 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
       std::fill(acc, acc + 4 * n, int64_t(0));
       for (size_t i = first; i < last; ++i) {
         const Sample& s = samples[i];
-        double t[3][3], point[3], b[3];
+        double t[3][3], b[3];
+        const double* point = s.point;  // measured at these positions by the owner search or a swap
         corners(coarse, s.owner, t);
-        closest_point_on_triangle(s.x, t[0], t[1], t[2], point);
         barycentric(point, t[0], t[1], t[2], b);
         for (int j = 0; j < 3; ++j) {
           int64_t* a = &acc[4 * size_t(tri[3 * size_t(s.owner) + j])];
@@ -295,16 +371,21 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
   // The owner or a triangle across one of its edges, whichever is closest (ties: the owner, then
   // the lower edge).
   auto update_owners = [&] {
+    prisms.build(coarse);
     pool.run(samples.size(), [&](size_t first, size_t last, unsigned) {
       for (size_t i = first; i < last; ++i) {
         Sample& s = samples[i];
         const uint32_t t = s.owner;
-        s.d2 = distance2_to(coarse, t, s.x);
+        s.d2 = closest_point_to(coarse, t, s.x, s.point);
         for (int k = 0; k < 3; ++k) {
           const uint32_t g = edges.twin[3 * size_t(t) + k];
-          if (g == kNone) continue;
-          const double d2 = distance2_to(coarse, g / 3, s.x);
-          if (d2 < s.d2) s.d2 = d2, s.owner = g / 3;
+          if (g == kNone || prisms.farther(g / 3, s.x, s.d2)) continue;
+          double point[3];
+          const double d2 = closest_point_to(coarse, g / 3, s.x, point);
+          if (d2 < s.d2) {
+            s.d2 = d2, s.owner = g / 3;
+            for (int d = 0; d < 3; ++d) s.point[d] = point[d];
+          }
         }
       }
     }, kMinParallelSamples);
@@ -312,9 +393,10 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
 
   const double angle_floor = swap_min_angle_deg * std::numbers::pi / 180;
   const double thin_floor = std::min(swap_min_angle_deg, kThinSwapAngleFloorDeg) * std::numbers::pi / 180;
+  std::vector<double> triangle_angle(triangles);  // smallest angle of each triangle, during the swaps
   std::vector<uint32_t> touched(n, 0);  // the swap pass (from 1) that last changed a vertex's fan
   std::vector<uint32_t> pair;
-  std::vector<double> to_first, to_second;
+  std::vector<double> to_first, to_second, points_first, points_second;
   uint32_t swap_pass = 0;
   // Tests edge h (the lower half-edge of its pair) and swaps it if that pays; true if swapped.
   auto try_swap = [&](uint32_t h) {
@@ -331,7 +413,8 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
     if (!(l1 > 0) || !(l2 > 0)) return false;
     const Vec3 side = (1 / l1) * n1 + (1 / l2) * n2;
     if (!(dot(cross(pu - pc, pd - pc), side) > 0) || !(dot(cross(pv - pd, pc - pd), side) > 0)) return false;
-    const double before = std::min(smallest_angle(pu, pv, pc), smallest_angle(pv, pu, pd));
+    // (t1 and t2 in their own vertex order: smallest_angle does not depend on the starting corner)
+    const double before = std::min(triangle_angle[t1], triangle_angle[t2]);
     const double after = std::min(smallest_angle(pc, pu, pd), smallest_angle(pd, pv, pc));
     // Below the floor only a swap that removes nearly all of the pair's distance (an edge laid
     // along a sharp crease the other diagonal cut across), and never below the thin floor.
@@ -348,11 +431,11 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
     const double a2[3][3] = {{pd.x, pd.y, pd.z}, {pv.x, pv.y, pv.z}, {pc.x, pc.y, pc.z}};
     double new_error = 0;
     to_first.resize(pair.size()), to_second.resize(pair.size());
+    points_first.resize(3 * pair.size()), points_second.resize(3 * pair.size());
     for (size_t i = 0; i < pair.size() && new_error < limit; ++i) {
       const Sample& s = samples[pair[i]];
-      double point[3];
-      to_first[i] = closest_point_on_triangle(s.x, a1[0], a1[1], a1[2], point);
-      to_second[i] = closest_point_on_triangle(s.x, a2[0], a2[1], a2[2], point);
+      to_first[i] = closest_point_on_triangle(s.x, a1[0], a1[1], a1[2], &points_first[3 * i]);
+      to_second[i] = closest_point_on_triangle(s.x, a2[0], a2[1], a2[2], &points_second[3 * i]);
       new_error += s.weight * std::min(to_first[i], to_second[i]);
     }
     if (!(new_error < limit)) return false;
@@ -376,8 +459,12 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
       const bool first = to_first[i] <= to_second[i];
       s.d2 = first ? to_first[i] : to_second[i];
       s.owner = first ? t1 : t2;
+      const double* point = first ? &points_first[3 * i] : &points_second[3 * i];
+      for (int d = 0; d < 3; ++d) s.point[d] = point[d];
       owned[s.owner].push_back(pair[i]);
     }
+    triangle_angle[t1] = smallest_angle(pc, pu, pd);
+    triangle_angle[t2] = smallest_angle(pd, pv, pc);
     touched[u] = touched[v] = touched[c] = touched[d] = swap_pass;
     return true;
   };
@@ -385,6 +472,9 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
   // fan changed in the pass before or this one.
   auto swap_edges = [&] {
     collect();
+    for (uint32_t t = 0; t < triangles; ++t)
+      triangle_angle[t] = smallest_angle(mesh_vertex(coarse, tri[3 * t]), mesh_vertex(coarse, tri[3 * t + 1]),
+                                         mesh_vertex(coarse, tri[3 * t + 2]));
     for (int pass = 0; pass < kMaxSwapPasses; ++pass) {
       ++swap_pass;
       uint64_t swapped = 0;
