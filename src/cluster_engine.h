@@ -2,7 +2,6 @@
 // GPU driver (host/). Nothing here is public API.
 #pragma once
 
-#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -10,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "fixed_point.h"
 #include "meshcvt/cluster.h"
 #include "meshcvt/mesh.h"
 #include "meshcvt/topology.h"
@@ -37,7 +37,7 @@ struct ClusterProblem {
   uint32_t clusters = 0;
   std::vector<float> point;   ///< 3 per face: centroid (cvt, ccvt) or unit normal (l21)
   std::vector<float> weight;  ///< per face: rho_k * area, normalized units
-  double fixed_scale = 1;     ///< fixed = llround(value * fixed_scale); |every sum| < 2^62
+  double fixed_scale = 1;     ///< fixed = round_half_away(value * fixed_scale); |every sum| < 2^62
   float origin[3] = {0, 0, 0};
   float extent = 1;           ///< input = origin + extent * normalized
   std::vector<float> normalized_positions;  ///< ccvt only: vertices in normalized coordinates
@@ -53,17 +53,6 @@ struct ClusterProblem {
     out[2] = round_half_away(w * py);
     out[3] = round_half_away(w * pz);
     out[4] = round_half_away(w * ((px * px + py * py) + pz * pz));
-  }
-
-  /// std::llround (half away from zero) without the libm call and without branches (the fraction
-  /// is as likely above a half as below: branches on it mispredict half the time). Same result:
-  /// below 2^52 the fraction x - trunc(x) is exact in double, above it x is an integer;
-  /// |x| < 2^62 here (fixed_scale).
-  static int64_t round_half_away(double x) {
-    assert(std::fabs(x) < 0x1p62);
-    int64_t r = int64_t(x);  // toward zero
-    double fraction = x - double(r);
-    return r + int64_t(fraction >= 0.5) - int64_t(fraction <= -0.5);
   }
 };
 

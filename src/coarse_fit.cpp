@@ -48,6 +48,7 @@
 #include "coarse_fit.h"
 #include "meshcvt/error.h"
 #include "coarse_rings.h"
+#include "fixed_point.h"
 #include "parallel.h"
 #include "triangle_bvh.h"
 #include "vec3.h"
@@ -348,8 +349,8 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
         barycentric(point, t[0], t[1], t[2], b);
         for (int j = 0; j < 3; ++j) {
           int64_t* a = &acc[4 * size_t(tri[3 * size_t(s.owner) + j])];
-          a[0] += std::llround(s.weight * b[j] * weight_scale);
-          for (int d = 0; d < 3; ++d) a[1 + d] += std::llround(s.weight * b[j] * (s.x[d] - point[d]) * residual_scale);
+          a[0] += round_half_away(s.weight * b[j] * weight_scale);
+          for (int d = 0; d < 3; ++d) a[1 + d] += round_half_away(s.weight * b[j] * (s.x[d] - point[d]) * residual_scale);
         }
       }
     }, kMinParallelSamples);
