@@ -51,6 +51,7 @@
 #include "fixed_point.h"
 #include "parallel.h"
 #include "triangle_bvh.h"
+#include "triangle_prisms.h"
 #include "vec3.h"
 
 namespace meshcvt {
@@ -189,58 +190,6 @@ struct Sample {
   uint32_t owner;
 };
 
-// Three planes per coarse triangle, one through each edge, perpendicular to the triangle and
-// facing away from it: the triangle lies on the inner side of all three, so a point's distance to
-// it is at least the point's largest distance beyond them. The owner searches use that bound to
-// skip the closest-point test of a triangle that cannot be nearer than one already measured:
-// most samples lie well inside their owner's prism, away from its neighbours (the 1.2M bunny ->
-// 10k with qem: 0.25M of 6.5M neighbour tests are left in the three owner updates, 0.8M of 4.3M
-// in the first owner search; the updates took 47 ms a pass). The skip is exact: a triangle is
-// passed over only when its bound exceeds the best distance by `tolerance`, a billionth of the
-// mesh's scale, far above the rounding of either number, so the owners are those the full tests
-// find.
-class TrianglePrisms {
- public:
-  explicit TrianglePrisms(double tolerance) : tolerance_(tolerance) {}
-
-  // The planes of every triangle of `coarse` at its current positions. A degenerate triangle
-  // gets zero planes (bound 0: always tested).
-  void build(const Mesh& coarse) {
-    const size_t triangles = coarse.face_count();
-    planes_.assign(12 * triangles, 0.0);
-    for (size_t t = 0; t < triangles; ++t) {
-      const Vec3 p[3] = {mesh_vertex(coarse, coarse.indices[3 * t]), mesh_vertex(coarse, coarse.indices[3 * t + 1]),
-                         mesh_vertex(coarse, coarse.indices[3 * t + 2])};
-      const Vec3 normal = cross(p[1] - p[0], p[2] - p[0]);
-      for (int k = 0; k < 3; ++k) {
-        const Vec3 out = cross(p[(k + 1) % 3] - p[k], normal);  // in the plane, away from the third corner
-        const double l = length(out);
-        if (!(l > 0) || !std::isfinite(l)) {
-          std::fill(&planes_[12 * t], &planes_[12 * t + 12], 0.0);
-          break;
-        }
-        const Vec3 m = (1 / l) * out;
-        double* plane = &planes_[12 * t + 4 * k];
-        plane[0] = m.x, plane[1] = m.y, plane[2] = m.z, plane[3] = dot(m, p[k]);
-      }
-    }
-  }
-
-  // Whether triangle t is certainly farther from x than squared distance d2.
-  bool farther(uint32_t t, const double x[3], double d2) const {
-    const double* plane = &planes_[12 * size_t(t)];
-    double beyond = 0;
-    for (int k = 0; k < 3; ++k, plane += 4)
-      beyond = std::max(beyond, (plane[0] * x[0] + plane[1] * x[1]) + plane[2] * x[2] - plane[3]);
-    const double bound = beyond - tolerance_;
-    return bound > 0 && bound * bound > d2;
-  }
-
- private:
-  double tolerance_;
-  std::vector<double> planes_;  // per triangle, per edge: unit normal and offset
-};
-
 }  // namespace
 
 namespace detail {
@@ -296,6 +245,8 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
   WorkerPool pool(threads);
   double scale = diagonal;  // of the coordinates, for the prisms' tolerance
   for (int d = 0; d < 3; ++d) scale = std::max({scale, std::fabs(lo[d]), std::fabs(hi[d])});
+  // A triangle the prisms rule out is one the full test would not have found nearer (the
+  // tolerance is far above the rounding of either), so the owners are those of full searches.
   TrianglePrisms prisms(1e-9 * scale);
   prisms.build(coarse);
   // The closest of the triangles around the cluster's vertex (ties: the first in the ring). The

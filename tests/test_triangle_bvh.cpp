@@ -1,6 +1,7 @@
 // Tests for the triangle BVH (src/triangle_bvh.h): the point-triangle distance against an
 // independent computation, and BVH queries against a brute-force loop over every face, on random,
-// sliver, degenerate, duplicated and badly distributed triangles.
+// sliver, degenerate, duplicated and badly distributed triangles. Also the prisms' lower bound of
+// that distance (src/triangle_prisms.h) against the distance itself.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "triangle_bvh.h"
+#include "triangle_prisms.h"
 
 using meshcvt::kNone;
 using meshcvt::TriangleBvh;
@@ -388,4 +390,58 @@ TEST_CASE("TriangleBvh: a tree built by several threads answers like one built b
     check_same(four.closest_point(q), a);
     if (i < 4) check_same(a, brute_force(soup, q));
   }
+}
+
+TEST_CASE("TrianglePrisms: known bounds around a right triangle") {
+  meshcvt::Mesh mesh;
+  mesh.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  mesh.indices = {0, 1, 2};
+  meshcvt::TrianglePrisms prisms(1e-9);
+  prisms.build(mesh);
+  // In the plane, 0.3 beyond edge 01: the bound is the distance, 0.3.
+  const double beside[3] = {0.5, -0.3, 0};
+  CHECK(prisms.farther(0, beside, 0.0899));
+  CHECK_FALSE(prisms.farther(0, beside, 0.09));
+  // 0.4 beyond the hypotenuse and 2 above the plane: the bound sees only the 0.4 (distance ~2.04).
+  const double above_beyond[3] = {0.5 + 0.4 / std::sqrt(2.0), 0.5 + 0.4 / std::sqrt(2.0), 2};
+  CHECK(prisms.farther(0, above_beyond, 0.159));
+  CHECK_FALSE(prisms.farther(0, above_beyond, 0.161));
+  // Over the triangle: no bound however high.
+  const double over[3] = {0.2, 0.2, 5};
+  CHECK_FALSE(prisms.farther(0, over, 0));
+  // Within the tolerance of a plane: not ruled out.
+  const double on_edge[3] = {0.5, -1e-10, 0};
+  CHECK_FALSE(prisms.farther(0, on_edge, 0));
+}
+
+TEST_CASE("TrianglePrisms: never rules out a triangle nearer than the distance given") {
+  // Random, sliver, needle and degenerate triangles; queries near each and farther away. Given
+  // the triangle's own squared distance by closest_point_on_triangle (the test the searches skip)
+  // or more, it must not be ruled out; given less, it mostly is.
+  Soup soup = random_soup(3000, 13);
+  meshcvt::Mesh mesh;
+  mesh.positions = soup.positions;
+  mesh.indices = soup.indices;
+  meshcvt::TrianglePrisms prisms(1e-9);
+  prisms.build(mesh);
+  Rng rng(17);
+  size_t ruled_out = 0, wrong = 0, queries = 0;
+  for (size_t f = 0; f < soup.faces(); ++f) {
+    const float* t = &soup.positions[9 * f];
+    for (int j = 0; j < 6; ++j) {
+      double q[3], point[3];
+      const double scale = j < 3 ? 0.01 : 0.3;
+      for (int k = 0; k < 3; ++k) q[k] = t[k] + scale * rng.uniform(-1, 1);
+      const double d2 = triangle_distance2(q, t, point);
+      for (double at_least : {1.0, 1 + 1e-12, 2.0}) wrong += prisms.farther(uint32_t(f), q, at_least * d2);
+      for (double below : {0.5, 0.01}) {
+        ++queries;
+        ruled_out += prisms.farther(uint32_t(f), q, below * d2);
+      }
+    }
+  }
+  CHECK(wrong == 0);
+  // The bound does rule out: a bound that never did would pass the check above.
+  CHECK(ruled_out > queries / 4);
+  MESSAGE("ruled out " << ruled_out << " of " << queries);
 }
