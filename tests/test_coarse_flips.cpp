@@ -84,6 +84,31 @@ TEST_CASE("coarse flips: a crease, a boundary and a valence-3 vertex are left al
   CHECK(tet.indices == tet_copy.indices);
 }
 
+TEST_CASE("coarse flips: a sliver whose normal is noise flips where the flip sweeps almost nothing") {
+  // c lies 0.01 above and 0.002 beside the edge u-v: a 0.6-degree cap whose normal points along
+  // -y, 79 degrees from its neighbour's +z. The flip to c-d sweeps a tetrahedron 1% as thick as
+  // the new edge is long: the surface stays where it is, and the cap becomes two fat triangles.
+  Mesh m;
+  m.positions = {-1, 0, 0, 1, 0, 0, 0, 0.002f, 0.01f, 0, -1, 0};
+  m.indices = {0, 1, 2, 1, 0, 3};
+  CHECK(triangle_quality(m).min_angle_deg < 1);
+  Mesh kept = m;
+  CHECK(flip_coarse_edges(kept, 25, 8, /*flat_slivers=*/false) == 0);  // as qem's coarsening asks
+  CHECK(flip_coarse_edges(m, 25) == 1);
+  CHECK(triangle_quality(m).min_angle_deg > 40);
+  for (int t = 0; t < 2; ++t) {  // both new triangles still face +z, as the larger old one did
+    const float* a = &m.positions[3 * m.indices[3 * t]];
+    const float* b = &m.positions[3 * m.indices[3 * t + 1]];
+    const float* c = &m.positions[3 * m.indices[3 * t + 2]];
+    CHECK((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) > 0);
+  }
+  // The same cap 0.3 above the edge: a real fold, 22% as thick as the new edge is long; left alone.
+  Mesh folded;
+  folded.positions = {-1, 0, 0, 1, 0, 0, 0, 0.002f, 0.3f, 0, -1, 0};
+  folded.indices = {0, 1, 2, 1, 0, 3};
+  CHECK(flip_coarse_edges(folded, 25) == 0);
+}
+
 TEST_CASE("coarse flips: topology, vertices and orientation are kept on closed and open meshes") {
   // A torus and an open grid with jittered vertices give many candidate flips.
   for (Mesh m : {test::torus(30, 12), test::grid(12, 9)}) {

@@ -63,7 +63,8 @@ struct CoarsenOptions {
   /// large meshes (0: every core). The result does not depend on it.
   unsigned threads = 0;
   /// After building the dual: flip the shared edge of two adjacent, nearly coplanar triangles (normals
-  /// within `flip_max_dihedral_deg`) whenever that raises the smaller of their minimum angles (see
+  /// within `flip_max_dihedral_deg`; for `closest` and `projected` also a sliver's pair where the
+  /// flip barely moves the surface) whenever that raises the smaller of their minimum angles (see
   /// flip_coarse_edges). Vertices, topology and orientation are kept. Only when the dual has no defect.
   bool flip_edges = true;
   double flip_max_dihedral_deg = 25;
@@ -206,12 +207,16 @@ std::vector<DualDefect> find_dual_defects(const Mesh& mesh, const Topology& topo
 /// Improves a triangle mesh by edge flips (src/coarse_flips.cpp): the edge shared by triangles
 /// (u, v, c) and (v, u, d) becomes (c, d) when both are oriented consistently, (c, d) is not an
 /// edge yet, u and v keep >= 3 edges (2 on a boundary), the triangles' normals are within
-/// max_dihedral_deg degrees (creases are not cut), the new triangles face the same side, and the
-/// smaller minimum angle of the pair strictly grows. Passes over all edges (in sorted order:
-/// deterministic) until none flips, at most max_passes. Vertices, Euler characteristic, boundaries
-/// and orientation are unchanged; edges with one or more than two triangles are never flipped.
-/// Returns the number of flips. O(E) per pass.
-uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg = 25, uint32_t max_passes = 8);
+/// max_dihedral_deg degrees (creases are not cut) or, with `flat_slivers`, the pair holds a
+/// triangle with an angle below 5 degrees and the tetrahedron (u, v, c, d) the flip sweeps is
+/// thinner than 5% of |cd| (a sliver's normal says nothing; such a flip barely moves the
+/// surface), the new triangles face the same side, and the smaller minimum angle of the pair
+/// strictly grows. Passes over all edges (in sorted order: deterministic) until none flips, at
+/// most max_passes. Vertices, Euler characteristic, boundaries and orientation are unchanged;
+/// edges with one or more than two triangles are never flipped. Returns the number of flips.
+/// O(E) per pass.
+uint64_t flip_coarse_edges(Mesh& mesh, double max_dihedral_deg = 25, uint32_t max_passes = 8,
+                           bool flat_slivers = true);
 
 /// Moves the vertices of a coarse mesh over the faces of their own clusters to improve its
 /// triangles (src/coarse_relax.cpp, where the rules are explained): tangential relaxation toward
