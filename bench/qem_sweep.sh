@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
-# `--vertex qem` on every mesh bench/fetch_meshes.sh fetched (libcgal-demo's data/meshes), two
-# binaries side by side: n = faces / 40 (at most 1000; meshes under 800 faces are skipped), then
+# `--vertex qem` (or $PLACEMENT: projected, closest) on every mesh bench/fetch_meshes.sh fetched
+# (libcgal-demo's data/meshes), two binaries side by side: n = faces / 40 (at most 1000; meshes under 800 faces are skipped), then
 # `meshcvt stats OUT --ref IN`. Prints one row per mesh (angles below 30 degrees, Q avg, RMS % of
 # the diagonal, smallest angle, defects left, for each binary) and a summary: total angles below
 # 30, mean Q avg, the median smallest angle and the meshes whose smallest angle is below 5 and 10
 # degrees, the median, smallest and largest RMS ratio NEW / BASE and the meshes above 1.2. A mesh either
 # binary refuses (an error exit) is listed with its message; meshes `meshcvt info` cannot read are
 # skipped. Results go to bench/RESULTS.md ("meshcvt against ACVD").
-# usage: bench/qem_sweep.sh BASE NEW [EXTRA OPTIONS...]   (needs bench/fetch_meshes.sh once)
+# usage: [PLACEMENT=projected] bench/qem_sweep.sh BASE NEW [EXTRA OPTIONS...]
+#        (needs bench/fetch_meshes.sh once)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 base=$1 new=$2
@@ -22,7 +23,7 @@ for mesh in bench/data/meshes/*.off bench/data/meshes/*.ply; do
   [ "$n" -lt 20 ] && continue
   row="$(basename "$mesh") $n"
   for bin in "$base" "$new"; do
-    if ! "$bin" coarsen "$mesh" -n "$n" -o "$work/out.ply" -q --vertex qem --no-error --report "$work/r.json" "$@" \
+    if ! "$bin" coarsen "$mesh" -n "$n" -o "$work/out.ply" -q --vertex "${PLACEMENT:-qem}" --no-error --report "$work/r.json" "$@" \
         2>"$work/err"; then
       echo "$row ERROR $(head -c 120 "$work/err" | tr '\n' ' ')" >>"$work/rows"
       continue 2
