@@ -13,10 +13,11 @@
 // A flip of edge (u, v) between (u, v, c) and (v, u, d) into (c, u, d) and (d, v, c) is done only
 // when: both triangles are oriented consistently across the edge, (c, d) is not an edge already
 // (the result stays a manifold), u and v keep at least 3 edges (2 on a boundary), the two triangles are nearly
-// coplanar (their normals within `max_dihedral_deg`, so creases of the surface are not cut) or the
-// tetrahedron (u, v, c, d) the flip sweeps is thinner than kFlatFlip of the new edge (the
-// normal of a sliver is noise: a cap of three nearly collinear points, a needle of two nearly
-// coincident ones where a thin part turns; on the 69 libcgal-demo meshes at faces / 40 this took
+// coplanar (their normals within `max_dihedral_deg`, so creases of the surface are not cut) or,
+// with `flat_slivers`, the pair holds a triangle below 5 degrees and the tetrahedron (u, v, c, d)
+// the flip sweeps is thinner than kFlatFlip of the new edge (the normal of a sliver is noise: a
+// cap of three nearly collinear points, a needle of two nearly coincident ones where a thin part
+// turns; on the 69 libcgal-demo meshes at faces / 40 this took
 // the default placement's smallest angle on cheese from 0.22 to 0.61 degrees, femur 0.27 -> 1.48,
 // helmet 3.5 -> 10.9, pinion_small 4.8 -> 17.6), the new triangles face the same side as the old
 // ones, and the smaller minimum angle strictly grows.

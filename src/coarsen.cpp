@@ -1039,12 +1039,12 @@ CoarsenResult coarsen_clustering(const Mesh& mesh, const Topology& topology, con
   // at 100 ended at 8.4 degrees instead of 11.5.
   const bool flat_slivers = options.placement != VertexPlacement::qem;
   if (options.flip_edges && result.defects.empty())
-    result.flipped_edges = flip_coarse_edges(result.mesh, options.flip_max_dihedral_deg, 8, flat_slivers);
+    result.flipped_edges = flip_coarse_edges(result.mesh, options.flip_max_dihedral_deg, /*max_passes=*/8, flat_slivers);
   if (options.relax_passes > 0 && result.defects.empty()) {
     result.relaxed_moves = detail::relax_coarse_vertices(result.mesh, mesh, topology, labels, options.relax_passes,
                                                          options.relax_max_normal_turn_deg, &vertex_faces, options.threads);
     if (options.flip_edges && result.relaxed_moves > 0)
-      result.flipped_edges += flip_coarse_edges(result.mesh, options.flip_max_dihedral_deg, 8, flat_slivers);
+      result.flipped_edges += flip_coarse_edges(result.mesh, options.flip_max_dihedral_deg, /*max_passes=*/8, flat_slivers);
   }
   if (options.placement == VertexPlacement::qem && result.defects.empty()) {
     const detail::FitCounts fit =
