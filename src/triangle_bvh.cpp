@@ -384,6 +384,112 @@ class Builder {
   std::vector<uint32_t>& faces_;  // input face id of prims_[i]
 };
 
+// The Morton build (TriangleBvh::Build::morton): the faces sorted along a Morton curve of their
+// centroids (10 bits per axis of the centroids' box), then split top-down where the leading bit of
+// the range's codes changes, so that each split is a plane of the curve's octree; ranges of one
+// code split at their middle. No surface-area sweep and no partition: a radix sort and one pass
+// that fills the boxes on the way back up. Depth at most 30 (the code's bits) + 32 (middles).
+class MortonBuilder {
+ public:
+  MortonBuilder(std::vector<PrimRef>& prims, std::vector<uint32_t>& faces) : prims_(prims), faces_(faces) {}
+
+  NodeList build(const Range& all) {
+    const uint32_t n = uint32_t(prims_.size());
+    float lo[3], scale[3];
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = all.cbox.min[k];
+      const float extent = all.cbox.max[k] - lo[k];
+      scale[k] = extent > 0 ? 1023.0f / extent : 0.0f;
+      if (!std::isfinite(scale[k])) scale[k] = 0.0f;
+    }
+    std::vector<uint32_t> code(n);
+    for (uint32_t i = 0; i < n; ++i) {
+      float c[4];
+      centroid2(prims_[i], c);
+      uint32_t key = 0;
+      for (int k = 0; k < 3; ++k) {
+        const float t = std::clamp((c[k] - lo[k]) * scale[k], 0.0f, 1023.0f);
+        key |= spread_bits(uint32_t(t)) << (2 - k);
+      }
+      code[i] = key;
+    }
+    // Stable radix sort by code (4 passes of 8 bits): equal codes keep the faces' order.
+    std::vector<uint32_t> order(n), next(n);
+    for (uint32_t i = 0; i < n; ++i) order[i] = i;
+    for (int shift = 0; shift < 32; shift += 8) {
+      uint32_t start[257] = {};
+      for (uint32_t i : order) ++start[((code[i] >> shift) & 255) + 1];
+      for (int b = 0; b < 256; ++b) start[b + 1] += start[b];
+      for (uint32_t i : order) next[start[(code[i] >> shift) & 255]++] = i;
+      order.swap(next);
+    }
+    {
+      std::vector<PrimRef> sorted_prims(n);
+      std::vector<uint32_t> sorted_faces(n);
+      codes_.resize(n);
+      for (uint32_t i = 0; i < n; ++i) {
+        sorted_prims[i] = prims_[order[i]];
+        sorted_faces[i] = faces_[order[i]];
+        codes_[i] = code[order[i]];
+      }
+      prims_.swap(sorted_prims);
+      faces_.swap(sorted_faces);
+    }
+    nodes_.assign(1, TriangleBvh::Node{});
+    subtree(0, 0, n);
+    return std::move(nodes_);
+  }
+
+ private:
+  static constexpr uint32_t kLeaf = 4;  // ranges this small are leaves
+
+  // The 10 bits of x spread to every third bit (x9 at bit 27, ..., x0 at bit 0).
+  static uint32_t spread_bits(uint32_t x) {
+    x &= 1023;
+    x = (x | (x << 16)) & 0x030000FF;
+    x = (x | (x << 8)) & 0x0300F00F;
+    x = (x | (x << 4)) & 0x030C30C3;
+    x = (x | (x << 2)) & 0x09249249;
+    return x;
+  }
+
+  // Fills node `at` with the subtree of [begin, end) and returns its box.
+  Box subtree(uint32_t at, uint32_t begin, uint32_t end) {
+    Box box;
+    if (end - begin <= kLeaf) {
+      for (uint32_t i = begin; i < end; ++i) box.grow(prims_[i]);
+      TriangleBvh::Node& leaf = nodes_[at];
+      for (int k = 0; k < 3; ++k) leaf.min[k] = box.min[k], leaf.max[k] = box.max[k];
+      leaf.index = begin;
+      leaf.count = end - begin;
+      return box;
+    }
+    uint32_t mid = begin + (end - begin) / 2;
+    const uint32_t differ = codes_[begin] ^ codes_[end - 1];
+    if (differ != 0) {  // the first code with the leading differing bit set (codes are sorted)
+      const uint32_t bit = 1u << (31 - __builtin_clz(differ));
+      mid = uint32_t(std::partition_point(codes_.begin() + begin, codes_.begin() + end,
+                                          [bit](uint32_t c) { return (c & bit) == 0; }) -
+                     codes_.begin());
+    }
+    assert(mid > begin && mid < end);
+    const uint32_t first = uint32_t(nodes_.size());
+    nodes_.resize(nodes_.size() + 2);
+    box = subtree(first, begin, mid);
+    box.grow(subtree(first + 1, mid, end));
+    TriangleBvh::Node& inner = nodes_[at];
+    for (int k = 0; k < 3; ++k) inner.min[k] = box.min[k], inner.max[k] = box.max[k];
+    inner.index = first;
+    inner.count = 0;
+    return box;
+  }
+
+  std::vector<PrimRef>& prims_;
+  std::vector<uint32_t>& faces_;
+  std::vector<uint32_t> codes_;  // Morton code of prims_[i], after the sort
+  NodeList nodes_;
+};
+
 }  // namespace
 
 double closest_point_on_triangle(const double p[3], const double a[3], const double b[3], const double c[3],
@@ -448,7 +554,8 @@ double closest_point_on_triangle(const double p[3], const double a[3], const dou
   return distance2(p, closest);
 }
 
-TriangleBvh::TriangleBvh(const float* positions, const uint32_t* indices, size_t face_count, unsigned threads) {
+TriangleBvh::TriangleBvh(const float* positions, const uint32_t* indices, size_t face_count, unsigned threads,
+                         Build build) {
   if (face_count == 0) return;
   assert(face_count < size_t(kNone));
   const uint32_t F = uint32_t(face_count);
@@ -476,7 +583,8 @@ TriangleBvh::TriangleBvh(const float* positions, const uint32_t* indices, size_t
   int parallel_depth = 0;
   while (threads > 1 && (1u << parallel_depth) < threads && parallel_depth < 4) ++parallel_depth;
   if (parallel_depth > 0) ++parallel_depth;
-  NodeList nodes = Builder(prims, prim_faces).build(all, parallel_depth);
+  NodeList nodes = build == Build::morton ? MortonBuilder(prims, prim_faces).build(all)
+                                           : Builder(prims, prim_faces).build(all, parallel_depth);
 
   // Node i of the list becomes node i + 1 (the root stays 0, node 1 is unused), so sibling pairs
   // start at even indices and fill one NodePair each.

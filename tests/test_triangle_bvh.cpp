@@ -222,9 +222,11 @@ TEST_CASE("closest_point_on_triangle agrees with an independent computation on r
 }
 
 TEST_CASE("TriangleBvh: same face, distance and point as brute force on random soups") {
+  for (TriangleBvh::Build build : {TriangleBvh::Build::sah, TriangleBvh::Build::morton})
   for (uint64_t seed : {1, 2, 3}) {
+    CAPTURE(int(build));
     Soup soup = random_soup(seed == 1 ? 5 : 2500, seed);
-    TriangleBvh bvh(soup.positions.data(), soup.indices.data(), soup.faces());
+    TriangleBvh bvh(soup.positions.data(), soup.indices.data(), soup.faces(), 0, build);
     CHECK(bvh.face_count() == soup.faces());
     Rng rng(seed + 100);
     for (int i = 0; i < 400; ++i) {
@@ -248,7 +250,9 @@ TEST_CASE("TriangleBvh: ties go to the lower face id") {
       indices.insert(indices.end(), {v, v + 1, v + n + 2, v, v + n + 2, v + n + 1});
     }
   // Faces listed in reverse too, so "lowest id" is not just "first built".
+  for (TriangleBvh::Build build : {TriangleBvh::Build::sah, TriangleBvh::Build::morton})
   for (bool reverse : {false, true}) {
+    CAPTURE(int(build));
     std::vector<uint32_t> idx = indices;
     if (reverse) {
       std::vector<uint32_t> r;
@@ -257,7 +261,7 @@ TEST_CASE("TriangleBvh: ties go to the lower face id") {
     }
     std::vector<float> soup;
     for (uint32_t v : idx) soup.insert(soup.end(), positions.begin() + 3 * v, positions.begin() + 3 * v + 3);
-    TriangleBvh bvh(positions.data(), idx.data(), idx.size() / 3);
+    TriangleBvh bvh(positions.data(), idx.data(), idx.size() / 3, 0, build);
     for (int y = 0; y <= n; y += 3)
       for (int x = 0; x <= n; x += 2) {
         for (double z : {0.0, 0.5, -2.0}) {
@@ -271,30 +275,33 @@ TEST_CASE("TriangleBvh: ties go to the lower face id") {
 }
 
 TEST_CASE("TriangleBvh: identical triangles and exponentially spaced ones") {
-  SUBCASE("many copies of one triangle: the first copy wins") {
-    Soup soup;
-    float t[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
-    for (int i = 0; i < 300; ++i) soup.add(t);
-    TriangleBvh bvh(soup.positions.data(), soup.indices.data(), soup.faces());
-    double q[3] = {0.2, 0.2, 1};
-    TriangleBvh::Hit hit = bvh.closest_point(q);
-    CHECK(hit.face == 0);
-    CHECK(hit.distance2 == doctest::Approx(1));
-  }
-  SUBCASE("sizes and positions spread over many orders of magnitude") {
-    Soup soup;
-    for (int i = 0; i < 400; ++i) {
-      float s = std::ldexp(1.0f, -(i % 100));
-      float x = std::ldexp(1.0f, -(i / 4)) * (i % 2 ? 1.0f : -1.0f);
-      float t[9] = {x, 0, 0, x + s, 0, 0, x, s, float(i % 3) * s};
-      soup.add(t);
+  for (TriangleBvh::Build build : {TriangleBvh::Build::sah, TriangleBvh::Build::morton}) {
+    CAPTURE(int(build));
+    {  // many copies of one triangle: the first copy wins
+      Soup soup;
+      float t[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+      for (int i = 0; i < 300; ++i) soup.add(t);
+      TriangleBvh bvh(soup.positions.data(), soup.indices.data(), soup.faces(), 0, build);
+      double q[3] = {0.2, 0.2, 1};
+      TriangleBvh::Hit hit = bvh.closest_point(q);
+      CHECK(hit.face == 0);
+      CHECK(hit.distance2 == doctest::Approx(1));
     }
-    TriangleBvh bvh(soup.positions.data(), soup.indices.data(), soup.faces());
-    Rng rng(5);
-    for (int i = 0; i < 200; ++i) {
-      double q[3] = {std::ldexp(rng.uniform(-1, 1), -int(rng.uniform(0, 40))), rng.uniform(-1e-3, 1e-3),
-                     rng.uniform(-1e-6, 1e-6)};
-      check_same(bvh.closest_point(q), brute_force(soup.positions, q));
+    {  // sizes and positions spread over many orders of magnitude
+      Soup soup;
+      for (int i = 0; i < 400; ++i) {
+        float s = std::ldexp(1.0f, -(i % 100));
+        float x = std::ldexp(1.0f, -(i / 4)) * (i % 2 ? 1.0f : -1.0f);
+        float t[9] = {x, 0, 0, x + s, 0, 0, x, s, float(i % 3) * s};
+        soup.add(t);
+      }
+      TriangleBvh bvh(soup.positions.data(), soup.indices.data(), soup.faces(), 0, build);
+      Rng rng(5);
+      for (int i = 0; i < 200; ++i) {
+        double q[3] = {std::ldexp(rng.uniform(-1, 1), -int(rng.uniform(0, 40))), rng.uniform(-1e-3, 1e-3),
+                       rng.uniform(-1e-6, 1e-6)};
+        check_same(bvh.closest_point(q), brute_force(soup.positions, q));
+      }
     }
   }
 }
