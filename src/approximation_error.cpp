@@ -206,18 +206,22 @@ ApproximationError approximation_error(const Mesh& a, const Mesh& ref, uint64_t 
   const uint64_t n = samples_per_mesh ? samples_per_mesh : default_error_samples(a, ref);
 
   // The two trees are independent: build them side by side (the big one dominates the time).
+  // Morton trees: each is queried about once per sample or vertex of the other mesh, so a build
+  // three times cheaper than the SAH's outweighs its somewhat slower queries (measured by `meshcvt
+  // stats`: the 4.8M bunny's error 2.73 -> 2.06 s and 753 -> 583 MB peak, the 1.2M bunny's 1.04 ->
+  // 0.87 s, bunny00's 0.09 s either way). The distances are the same (TriangleBvh's exactness).
   TriangleBvh bvh_a, bvh_ref;
   {
     std::exception_ptr failure;
     std::thread builder([&] {
       try {
-        bvh_ref = TriangleBvh(ref);
+        bvh_ref = TriangleBvh(ref, 0, TriangleBvh::Build::morton);
       } catch (...) {
         failure = std::current_exception();
       }
     });
     try {
-      bvh_a = TriangleBvh(a);
+      bvh_a = TriangleBvh(a, 0, TriangleBvh::Build::morton);
     } catch (...) {
       builder.join();
       throw;
