@@ -4,7 +4,9 @@
 // box: binning all three axes costs 1.6x the time for the same query speed on meshes), leaves of at
 // most kMaxLeaf triangles, the top subtrees built by separate threads and joined in a fixed order.
 // Below depth kSahDepth the split falls back to the object median, so the depth stays bounded (and
-// the traversal stack fixed) whatever the triangle distribution.
+// the traversal stack fixed) whatever the triangle distribution. Or (Build::morton, MortonBuilder)
+// along a Morton curve of the centroids: a radix sort and one linear pass, for trees queried only
+// a few times per face.
 // Traversal: depth first, nearer child first, a subtree skipped only when its box is farther than
 // the best distance found so far plus a rounding tolerance.
 #include "triangle_bvh.h"
