@@ -404,35 +404,35 @@ class MortonBuilder {
       scale[k] = extent > 0 ? 1023.0f / extent : 0.0f;
       if (!std::isfinite(scale[k])) scale[k] = 0.0f;
     }
-    std::vector<uint32_t> code(n);
+    // Keys: the code above, the prim's index below. A stable radix sort on the code's 4 bytes
+    // (the keys travel with it, so every pass reads in order) keeps equal codes in face order.
+    std::vector<uint64_t> key(n), next(n);
     for (uint32_t i = 0; i < n; ++i) {
       float c[4];
       centroid2(prims_[i], c);
-      uint32_t key = 0;
+      uint32_t code = 0;
       for (int k = 0; k < 3; ++k) {
         const float t = std::clamp((c[k] - lo[k]) * scale[k], 0.0f, 1023.0f);
-        key |= spread_bits(uint32_t(t)) << (2 - k);
+        code |= spread_bits(uint32_t(t)) << (2 - k);
       }
-      code[i] = key;
+      key[i] = uint64_t(code) << 32 | i;
     }
-    // Stable radix sort by code (4 passes of 8 bits): equal codes keep the faces' order.
-    std::vector<uint32_t> order(n), next(n);
-    for (uint32_t i = 0; i < n; ++i) order[i] = i;
-    for (int shift = 0; shift < 32; shift += 8) {
+    for (int shift = 32; shift < 64; shift += 8) {
       uint32_t start[257] = {};
-      for (uint32_t i : order) ++start[((code[i] >> shift) & 255) + 1];
+      for (uint64_t k : key) ++start[((k >> shift) & 255) + 1];
       for (int b = 0; b < 256; ++b) start[b + 1] += start[b];
-      for (uint32_t i : order) next[start[(code[i] >> shift) & 255]++] = i;
-      order.swap(next);
+      for (uint64_t k : key) next[start[(k >> shift) & 255]++] = k;
+      key.swap(next);
     }
     {
       std::vector<PrimRef> sorted_prims(n);
       std::vector<uint32_t> sorted_faces(n);
       codes_.resize(n);
       for (uint32_t i = 0; i < n; ++i) {
-        sorted_prims[i] = prims_[order[i]];
-        sorted_faces[i] = faces_[order[i]];
-        codes_[i] = code[order[i]];
+        const uint32_t from = uint32_t(key[i]);
+        sorted_prims[i] = prims_[from];
+        sorted_faces[i] = faces_[from];
+        codes_[i] = uint32_t(key[i] >> 32);
       }
       prims_.swap(sorted_prims);
       faces_.swap(sorted_faces);
