@@ -19,6 +19,8 @@
 #include <system_error>
 #include <thread>
 
+#include "morton.h"
+
 namespace meshcvt {
 
 namespace {
@@ -389,8 +391,9 @@ class Builder {
 // The Morton build (TriangleBvh::Build::morton): the faces sorted along a Morton curve of their
 // centroids (10 bits per axis of the centroids' box), then split top-down where the leading bit of
 // the range's codes changes, so that each split is a plane of the curve's octree; ranges of one
-// code split at their middle. No surface-area sweep and no partition: a radix sort and one pass
-// that fills the boxes on the way back up. Depth at most 30 (the code's bits) + 32 (middles).
+// code split at their middle. No surface-area sweep and no partition: the radix sort of the
+// locality order (morton.h) and one pass that fills the boxes on the way back up. Depth at most
+// 30 (the code's bits) + 32 (middles).
 class MortonBuilder {
  public:
   MortonBuilder(std::vector<PrimRef>& prims, std::vector<uint32_t>& faces) : prims_(prims), faces_(faces) {}
@@ -404,35 +407,27 @@ class MortonBuilder {
       scale[k] = extent > 0 ? 1023.0f / extent : 0.0f;
       if (!std::isfinite(scale[k])) scale[k] = 0.0f;
     }
-    // Keys: the code above, the prim's index below. A stable radix sort on the code's 4 bytes
-    // (the keys travel with it, so every pass reads in order) keeps equal codes in face order.
-    std::vector<uint64_t> key(n), next(n);
+    std::vector<uint32_t> code(n);
     for (uint32_t i = 0; i < n; ++i) {
       float c[4];
       centroid2(prims_[i], c);
-      uint32_t code = 0;
+      uint32_t key = 0;
       for (int k = 0; k < 3; ++k) {
         const float t = std::clamp((c[k] - lo[k]) * scale[k], 0.0f, 1023.0f);
-        code |= spread_bits(uint32_t(t)) << (2 - k);
+        key |= spread_bits(uint32_t(t)) << k;
       }
-      key[i] = uint64_t(code) << 32 | i;
+      code[i] = key;
     }
-    for (int shift = 32; shift < 64; shift += 8) {
-      uint32_t start[257] = {};
-      for (uint64_t k : key) ++start[((k >> shift) & 255) + 1];
-      for (int b = 0; b < 256; ++b) start[b + 1] += start[b];
-      for (uint64_t k : key) next[start[(k >> shift) & 255]++] = k;
-      key.swap(next);
-    }
+    // Stable: equal codes keep the faces' order, so the tree is a function of the mesh alone.
+    const std::vector<uint32_t> order = sort_by_key(code);
     {
       std::vector<PrimRef> sorted_prims(n);
       std::vector<uint32_t> sorted_faces(n);
       codes_.resize(n);
       for (uint32_t i = 0; i < n; ++i) {
-        const uint32_t from = uint32_t(key[i]);
-        sorted_prims[i] = prims_[from];
-        sorted_faces[i] = faces_[from];
-        codes_[i] = uint32_t(key[i] >> 32);
+        sorted_prims[i] = prims_[order[i]];
+        sorted_faces[i] = faces_[order[i]];
+        codes_[i] = code[order[i]];
       }
       prims_.swap(sorted_prims);
       faces_.swap(sorted_faces);
@@ -444,16 +439,6 @@ class MortonBuilder {
 
  private:
   static constexpr uint32_t kLeaf = 4;  // ranges this small are leaves
-
-  // The 10 bits of x spread to every third bit (x9 at bit 27, ..., x0 at bit 0).
-  static uint32_t spread_bits(uint32_t x) {
-    x &= 1023;
-    x = (x | (x << 16)) & 0x030000FF;
-    x = (x | (x << 8)) & 0x0300F00F;
-    x = (x | (x << 4)) & 0x030C30C3;
-    x = (x | (x << 2)) & 0x09249249;
-    return x;
-  }
 
   // Fills node `at` with the subtree of [begin, end) and returns its box.
   Box subtree(uint32_t at, uint32_t begin, uint32_t end) {
