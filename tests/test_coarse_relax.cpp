@@ -134,6 +134,73 @@ TEST_CASE("coarse relax: a hexagon whose centre vertex sits off-centre in its cl
   CHECK(none.positions == coarse.positions);
 }
 
+TEST_CASE("coarse relax: a vertex at the apex of a cap on a curved surface moves off the chord") {
+  // The hexagon of the first case on a cylinder of radius 2 (the grid bent around the x axis),
+  // its centre cluster a disk of radius 0.28, and the centre vertex on the surface at 98% of the
+  // way to the midpoint of side 1-2: triangle (0, 1, 2) is a cap of about 175 degrees whose plane
+  // stands across the surface. Any move of its apex turns its normal by tens of degrees, which the
+  // 20-degree limit refused, leaving the cap (cylinder_locally_refined -> 411: 0.38 degrees).
+  // A cap's apex is judged by whether the cap then faces the ring's side.
+  const double radius = 2, cx = 0.5, cy = 0.5, hexagon = 0.3;
+  auto bend = [&](double u, double v, double out[3]) {
+    out[0] = u, out[1] = radius * std::sin(v / radius), out[2] = radius * (1 - std::cos(v / radius));
+  };
+  Mesh input = test::grid(60, 60);
+  for (size_t i = 0; i < input.vertex_count(); ++i) {
+    double p[3];
+    bend(input.positions[3 * i], input.positions[3 * i + 1], p);
+    for (int d = 0; d < 3; ++d) input.positions[3 * i + d] = float(p[d]);
+  }
+  double site[7][2] = {{cx, cy}};
+  for (int k = 0; k < 6; ++k) {
+    site[k + 1][0] = cx + hexagon * std::cos(k * std::numbers::pi / 3);
+    site[k + 1][1] = cy + hexagon * std::sin(k * std::numbers::pi / 3);
+  }
+  // Labels by the faces' centroids in the grid's own coordinates (before the bend).
+  const Mesh flat = test::grid(60, 60);
+  std::vector<uint32_t> labels(flat.face_count());
+  for (size_t f = 0; f < flat.face_count(); ++f) {
+    double gx = 0, gy = 0;
+    for (int j = 0; j < 3; ++j) {
+      gx += flat.positions[3 * flat.indices[3 * f + j]] / 3;
+      gy += flat.positions[3 * flat.indices[3 * f + j] + 1] / 3;
+    }
+    uint32_t best = 1;
+    if (std::hypot(gx - cx, gy - cy) < 0.28) best = 0;
+    for (uint32_t s = 2; s < 7 && best != 0; ++s)
+      if (std::hypot(gx - site[s][0], gy - site[s][1]) < std::hypot(gx - site[best][0], gy - site[best][1])) best = s;
+    labels[f] = best;
+  }
+  Mesh coarse;
+  double p[3];
+  bend(cx + 0.98 * (0.5 * (site[1][0] + site[2][0]) - cx), cy + 0.98 * (0.5 * (site[1][1] + site[2][1]) - cy), p);
+  test::add_vertex(coarse, p[0], p[1], p[2]);
+  for (int k = 0; k < 6; ++k) {
+    bend(site[k + 1][0], site[k + 1][1], p);
+    test::add_vertex(coarse, p[0], p[1], p[2]);
+  }
+  for (uint32_t k = 0; k < 6; ++k) test::add_triangle(coarse, 0, 1 + k, 1 + (k + 1) % 6);
+  const Topology topology = build_topology(input);
+  // On the cylinder, 2e-5 from the grid's flat faces: within what relax counts as on them.
+  REQUIRE(distance_to_cluster(coarse, 0, input, labels, 0) < 3e-5);
+  const TriangleQuality before = triangle_quality(coarse);
+  REQUIRE(before.min_angle_deg < 5);
+
+  Mesh relaxed = coarse;
+  CHECK(relax_coarse_vertices(relaxed, input, topology, labels) > 0);
+  const TriangleQuality after = triangle_quality(relaxed);
+  CHECK(after.min_angle_deg > 30);
+  CHECK(distance_to_cluster(relaxed, 0, input, labels, 0) < 1e-5);
+  CHECK(relaxed.indices == coarse.indices);
+  // Every triangle still faces the side the fan faced (+z at the top of the cylinder, near y = 0).
+  for (size_t t = 0; t < relaxed.face_count(); ++t) {
+    const float* a = &relaxed.positions[3 * relaxed.indices[3 * t]];
+    const float* b = &relaxed.positions[3 * relaxed.indices[3 * t + 1]];
+    const float* c = &relaxed.positions[3 * relaxed.indices[3 * t + 2]];
+    CHECK(double(b[0] - a[0]) * (c[1] - a[1]) - double(b[1] - a[1]) * (c[0] - a[0]) > 0);
+  }
+}
+
 TEST_CASE("coarse relax: a vertex at an edge that is not two consistently oriented triangles stays") {
   // The hexagon's centre moves as built (first case); each of these defects at its edges keeps it
   // where it is: a fan triangle turned over, one repeated, a fin on a spoke, a triangle repeating it.
