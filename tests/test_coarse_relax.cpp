@@ -65,6 +65,25 @@ UnrelaxedDual unrelaxed_dual(const Mesh& input, const Topology& topology, uint32
   return d;
 }
 
+// Labels for the hexagon fixtures, by face centroid in the grid's x and y: within `disk` of
+// site[0] (the centre) cluster 0, otherwise the nearest of the six corners site[1..6].
+std::vector<uint32_t> hexagon_labels(const Mesh& grid, const double site[7][2], double disk) {
+  std::vector<uint32_t> labels(grid.face_count());
+  for (size_t f = 0; f < grid.face_count(); ++f) {
+    double gx = 0, gy = 0;
+    for (int j = 0; j < 3; ++j) {
+      gx += grid.positions[3 * grid.indices[3 * f + j]] / 3;
+      gy += grid.positions[3 * grid.indices[3 * f + j] + 1] / 3;
+    }
+    uint32_t best = 1;
+    if (std::hypot(gx - site[0][0], gy - site[0][1]) < disk) best = 0;
+    for (uint32_t s = 2; s < 7 && best != 0; ++s)
+      if (std::hypot(gx - site[s][0], gy - site[s][1]) < std::hypot(gx - site[best][0], gy - site[best][1])) best = s;
+    labels[f] = best;
+  }
+  return labels;
+}
+
 // Input: a fine flat grid. Clusters (by face centroid): a disk of radius 0.25 around a regular
 // hexagon's centre, the rest to the nearest corner. Coarse mesh: the hexagon's fan, the centre
 // vertex placed inside its own cluster but near one corner, which gives angles below 30 degrees.
@@ -83,20 +102,7 @@ OffCentreHexagon off_centre_hexagon() {
     site[k + 1][0] = cx + radius * std::cos(k * std::numbers::pi / 3);
     site[k + 1][1] = cy + radius * std::sin(k * std::numbers::pi / 3);
   }
-  std::vector<uint32_t>& labels = h.labels;
-  labels.resize(input.face_count());
-  for (size_t f = 0; f < input.face_count(); ++f) {
-    double gx = 0, gy = 0;
-    for (int j = 0; j < 3; ++j) {
-      gx += input.positions[3 * input.indices[3 * f + j]] / 3;
-      gy += input.positions[3 * input.indices[3 * f + j] + 1] / 3;
-    }
-    uint32_t best = 1;
-    if (std::hypot(gx - cx, gy - cy) < 0.25) best = 0;
-    for (uint32_t s = 2; s < 7 && best != 0; ++s)
-      if (std::hypot(gx - site[s][0], gy - site[s][1]) < std::hypot(gx - site[best][0], gy - site[best][1])) best = s;
-    labels[f] = best;
-  }
+  h.labels = hexagon_labels(input, site, 0.25);
   Mesh& coarse = h.coarse;
   test::add_vertex(coarse, cx + 0.2, cy + 0.03, 0);  // inside the centre disk, near corner 1
   for (int k = 0; k < 6; ++k) test::add_vertex(coarse, site[k + 1][0], site[k + 1][1], 0);
@@ -157,20 +163,7 @@ TEST_CASE("coarse relax: a vertex at the apex of a cap on a curved surface moves
     site[k + 1][1] = cy + hexagon * std::sin(k * std::numbers::pi / 3);
   }
   // Labels by the faces' centroids in the grid's own coordinates (before the bend).
-  const Mesh flat = test::grid(60, 60);
-  std::vector<uint32_t> labels(flat.face_count());
-  for (size_t f = 0; f < flat.face_count(); ++f) {
-    double gx = 0, gy = 0;
-    for (int j = 0; j < 3; ++j) {
-      gx += flat.positions[3 * flat.indices[3 * f + j]] / 3;
-      gy += flat.positions[3 * flat.indices[3 * f + j] + 1] / 3;
-    }
-    uint32_t best = 1;
-    if (std::hypot(gx - cx, gy - cy) < 0.28) best = 0;
-    for (uint32_t s = 2; s < 7 && best != 0; ++s)
-      if (std::hypot(gx - site[s][0], gy - site[s][1]) < std::hypot(gx - site[best][0], gy - site[best][1])) best = s;
-    labels[f] = best;
-  }
+  const std::vector<uint32_t> labels = hexagon_labels(test::grid(60, 60), site, 0.28);
   Mesh coarse;
   double p[3];
   bend(cx + 0.98 * (0.5 * (site[1][0] + site[2][0]) - cx), cy + 0.98 * (0.5 * (site[1][1] + site[2][1]) - cy), p);
