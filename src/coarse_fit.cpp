@@ -50,6 +50,7 @@
 #include "coarse_rings.h"
 #include "fixed_point.h"
 #include "parallel.h"
+#include "triangle_angle.h"
 #include "triangle_bvh.h"
 #include "triangle_prisms.h"
 #include "vec3.h"
@@ -119,12 +120,6 @@ double closest_point_to(const Mesh& coarse, uint32_t triangle, const double x[3]
   double t[3][3];
   corners(coarse, triangle, t);
   return closest_point_on_triangle(x, t[0], t[1], t[2], point);
-}
-
-// Smallest angle of triangle (a, b, c) in radians, 0 when degenerate.
-double smallest_angle(Vec3 a, Vec3 b, Vec3 c) {
-  auto at = [](Vec3 p, Vec3 q, Vec3 r) { return std::atan2(length(cross(q - p, r - p)), dot(q - p, r - p)); };
-  return std::min({at(a, b, c), at(b, c, a), at(c, a, b)});
 }
 
 // Half-edges of the coarse mesh: h = 3t + k runs from indices[h] to indices[next(h)]; twin[h] is
@@ -345,6 +340,11 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
 
   const double angle_floor = swap_min_angle_deg * std::numbers::pi / 180;
   const double thin_floor = std::min(swap_min_angle_deg, kThinSwapAngleFloorDeg) * std::numbers::pi / 180;
+  // The smallest angle of the coarse triangle (a, b, c) of vertex ids, radians (triangle_angle.h).
+  auto vertex_angle = [&](uint32_t a, uint32_t b, uint32_t c) {
+    return smallest_angle(&coarse.positions[3 * size_t(a)], &coarse.positions[3 * size_t(b)],
+                          &coarse.positions[3 * size_t(c)]);
+  };
   std::vector<double> triangle_angle(triangles);  // smallest angle of each triangle, during the swaps
   std::vector<uint32_t> touched(n, 0);  // the swap pass (from 1) that last changed a vertex's fan
   std::vector<uint32_t> pair;
@@ -367,7 +367,7 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
     if (!(dot(cross(pu - pc, pd - pc), side) > 0) || !(dot(cross(pv - pd, pc - pd), side) > 0)) return false;
     // (t1 and t2 in their own vertex order: smallest_angle does not depend on the starting corner)
     const double before = std::min(triangle_angle[t1], triangle_angle[t2]);
-    const double after = std::min(smallest_angle(pc, pu, pd), smallest_angle(pd, pv, pc));
+    const double after = std::min(vertex_angle(c, u, d), vertex_angle(d, v, c));
     // Below the floor only a swap that removes nearly all of the pair's distance (an edge laid
     // along a sharp crease the other diagonal cut across), and never below the thin floor.
     const bool thin = after < std::min(before, angle_floor);
@@ -415,8 +415,8 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
       for (int d = 0; d < 3; ++d) s.point[d] = point[d];
       owned[s.owner].push_back(pair[i]);
     }
-    triangle_angle[t1] = smallest_angle(pc, pu, pd);
-    triangle_angle[t2] = smallest_angle(pd, pv, pc);
+    triangle_angle[t1] = vertex_angle(c, u, d);
+    triangle_angle[t2] = vertex_angle(d, v, c);
     touched[u] = touched[v] = touched[c] = touched[d] = swap_pass;
     return true;
   };
@@ -425,8 +425,7 @@ FitCounts fit_coarse_mesh(Mesh& coarse, const Mesh& mesh, const std::vector<uint
   auto swap_edges = [&] {
     collect();
     for (uint32_t t = 0; t < triangles; ++t)
-      triangle_angle[t] = smallest_angle(mesh_vertex(coarse, tri[3 * t]), mesh_vertex(coarse, tri[3 * t + 1]),
-                                         mesh_vertex(coarse, tri[3 * t + 2]));
+      triangle_angle[t] = vertex_angle(tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]);
     for (int pass = 0; pass < kMaxSwapPasses; ++pass) {
       ++swap_pass;
       uint64_t swapped = 0;

@@ -1,5 +1,6 @@
 // meshcvt: the smallest angle of a triangle, shared by the passes that judge coarse triangles by it
-// (the dual's polygon triangulation in coarsen.cpp, the widening in coarse_toward_surface.cpp).
+// (the dual's polygon triangulation in coarsen.cpp, the widening in coarse_toward_surface.cpp, the
+// fitting's edge swaps in coarse_fit.cpp).
 // Internal, not public API.
 #pragma once
 
