@@ -46,8 +46,8 @@ class TriangleBvh {
     /// queries. For trees queried many times per face (the CCVT generator).
     sah,
     /// The faces sorted along a Morton curve of their centroids, split where the curve's leading
-    /// bit changes (a linear BVH, Lauterbach et al. 2009): about 0.15 s per million faces on one
-    /// thread (the 4.8M-face bunny: 0.72 s, the SAH build 2.15 s, 1.42 s on two threads), queries
+    /// bit changes (a linear BVH, Lauterbach et al. 2009): about 0.14 s per million faces on one
+    /// thread (the 4.8M-face bunny: 0.65-0.68 s, the SAH build 2.15 s, 1.42 s on two threads), queries
     /// somewhat slower. For trees queried a few times per face (approximation_error).
     morton,
   };
