@@ -2113,6 +2113,18 @@ ShapeApproximation mesh_partition_from_scratch(const Mesh& mesh, const Topology&
 
 ShapeApproximation approximate_shape(const Mesh& mesh, const Topology& topology, const ApproximateOptions& options) {
   validate(mesh, options);
+  // The L2,1 metric compares face normals: on a mesh whose triangles are ordered at random (boeing,
+  // the *-shuffled meshes of libcgal-demo) half of them point the wrong way. Orient a copy first.
+  if (topology.orientation_flips > 0) {
+    Mesh oriented = mesh;
+    Topology oriented_topology = topology;
+    const uint64_t flipped = orient_consistently(oriented, oriented_topology);
+    if (flipped > 0) {
+      ShapeApproximation out = approximate_shape(oriented, oriented_topology, options);
+      out.reoriented_faces = flipped;
+      return out;
+    }
+  }
   auto t = Clock::now();
   FaceGeometry geom = face_geometry(mesh);
   std::vector<RefinementRound> rounds;

@@ -1736,6 +1736,19 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
   detail::check_fit_angles(options.coarsen);
   if (!(options.coarsen.relax_max_normal_turn_deg >= 0 && options.coarsen.relax_max_normal_turn_deg <= 180))
     throw OptionError("relax: the normal turn limit must be within [0, 180] degrees");
+  // A mesh whose triangles are ordered at random (boeing, the *-shuffled meshes of libcgal-demo)
+  // has a dual whose triangles face every way: orient a copy first. The labels and the coarse
+  // mesh's vertices do not depend on the faces' orientation, only the dual's triangles do.
+  if (topology.orientation_flips > 0) {
+    Mesh oriented = mesh;
+    Topology oriented_topology = topology;
+    const uint64_t flipped = orient_consistently(oriented, oriented_topology);
+    if (flipped > 0) {
+      CoarsenMeshResult out = coarsen_mesh(oriented, oriented_topology, options);
+      out.reoriented_faces = flipped;
+      return out;
+    }
+  }
   const uint32_t n = options.cluster.clusters;
   CoarsenMeshResult out;
   out.allocation = allocate_component_clusters(mesh, topology, n, &options.cluster.density);

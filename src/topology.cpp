@@ -423,16 +423,24 @@ void label_components(Topology& t, size_t nf) {
 }
 
 // Two-colours each component by orientation: across a manifold edge run the same way, the
-// neighbour must be flipped. A conflict means no consistent orientation exists.
-uint32_t count_nonorientable(const Mesh& mesh, const Topology& t) {
+// neighbour must be flipped. flipped[f]: whether f must be flipped to agree with its component's
+// lowest face; conflict[c]: component c has no consistent orientation (the colours are then those
+// of a spanning tree, and some edge disagrees).
+struct OrientationColours {
+  std::vector<uint8_t> flipped;
+  std::vector<uint8_t> conflict;
+};
+
+OrientationColours colour_orientation(const Mesh& mesh, const Topology& t) {
   const uint32_t* indices = mesh.indices.data();
   size_t nf = mesh.face_count();
-  std::vector<uint8_t> flipped(nf, 2);  // 2: not reached yet
-  std::vector<uint8_t> bad(t.component_count, 0);
+  OrientationColours out;
+  out.flipped.assign(nf, 2);  // 2: not reached yet
+  out.conflict.assign(t.component_count, 0);
   std::vector<uint32_t> stack;
   for (uint32_t s = 0; s < nf; ++s) {
-    if (flipped[s] != 2) continue;
-    flipped[s] = 0;
+    if (out.flipped[s] != 2) continue;
+    out.flipped[s] = 0;
     stack.push_back(s);
     while (!stack.empty()) {
       uint32_t f = stack.back();
@@ -444,19 +452,22 @@ uint32_t count_nonorientable(const Mesh& mesh, const Topology& t) {
         bool same_direction = false;
         for (uint32_t eg = 0; eg < 3; ++eg)
           if (indices[3 * g + eg] == a && indices[3 * g + (eg + 1) % 3] == b) same_direction = true;
-        uint8_t want = uint8_t(flipped[f] ^ same_direction);
-        if (flipped[g] == 2) {
-          flipped[g] = want;
+        uint8_t want = uint8_t(out.flipped[f] ^ same_direction);
+        if (out.flipped[g] == 2) {
+          out.flipped[g] = want;
           stack.push_back(g);
-        } else if (flipped[g] != want) {
-          bad[t.face_component[f]] = 1;
+        } else if (out.flipped[g] != want) {
+          out.conflict[t.face_component[f]] = 1;
         }
       }
     }
   }
-  uint32_t count = 0;
-  for (uint8_t b : bad) count += b;
-  return count;
+  return out;
+}
+
+uint32_t count_nonorientable(const Mesh& mesh, const Topology& t) {
+  const OrientationColours colours = colour_orientation(mesh, t);
+  return uint32_t(std::count(colours.conflict.begin(), colours.conflict.end(), 1));
 }
 
 // Twice the area vector of face f, in double.
@@ -596,6 +607,48 @@ MeshInfo mesh_info(const Mesh& mesh, const Topology& t) {
   }
   info.total_area = area;
   return info;
+}
+
+uint64_t orient_consistently(Mesh& mesh, Topology& topology) {
+  assert(topology.face_adjacent.size() == mesh.indices.size());
+  if (topology.orientation_flips == 0) return 0;
+  const OrientationColours colours = colour_orientation(mesh, topology);
+  // Which colour keeps its orientation, per component. A closed component's faces are made to face
+  // outward: the colour under which its signed volume is positive (computed about a corner of its
+  // lowest face, so that a mesh far from the origin loses no digits). An open one has no inside:
+  // the colour with the larger area keeps its orientation, the lowest face's on a tie.
+  const uint32_t nc = topology.component_count;
+  std::vector<double> volume(nc, 0.0), area[2];
+  area[0].assign(nc, 0.0);
+  area[1].assign(nc, 0.0);
+  std::vector<uint8_t> open(nc, 0);
+  std::vector<uint32_t> origin(nc, kNone);
+  const float* p = mesh.positions.data();
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const uint32_t c = topology.face_component[f];
+    const uint32_t* corner = &mesh.indices[3 * f];
+    if (origin[c] == kNone) origin[c] = corner[0];
+    for (int e = 0; e < 3; ++e) open[c] |= topology.face_adjacent[3 * f + e] == kNone;
+    double cr[3];
+    face_cross(mesh, f, cr);
+    area[colours.flipped[f]][c] += std::sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
+    const float* o = p + 3 * size_t(origin[c]);
+    const float* a = p + 3 * size_t(corner[0]);
+    const double det = cr[0] * (double(a[0]) - o[0]) + cr[1] * (double(a[1]) - o[1]) + cr[2] * (double(a[2]) - o[2]);
+    volume[c] += colours.flipped[f] ? -det : det;  // six times the volume, all faces as the lowest face runs
+  }
+  std::vector<uint8_t> keep(nc, 0);
+  for (uint32_t c = 0; c < nc; ++c)
+    keep[c] = !open[c] && volume[c] != 0 ? uint8_t(volume[c] < 0) : uint8_t(area[1][c] > area[0][c]);
+  uint64_t flipped = 0;
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const uint32_t c = topology.face_component[f];
+    if (colours.conflict[c] || colours.flipped[f] == keep[c]) continue;
+    std::swap(mesh.indices[3 * f + 1], mesh.indices[3 * f + 2]);
+    ++flipped;
+  }
+  if (flipped > 0) topology = build_topology(mesh);
+  return flipped;
 }
 
 }  // namespace meshcvt

@@ -216,6 +216,29 @@ TEST_CASE("approximate: subdivided cube, 6 proxies -> 8 corners, 6 quads, 12 tri
   CHECK(volume == doctest::Approx(8.0).epsilon(1e-6));
 }
 
+TEST_CASE("approximate: a cube whose faces are oriented at random is oriented first") {
+  // Every other triangle (by a fixed pseudo-random sequence) listed the other way round, as in
+  // libcgal-demo's *-shuffled meshes: half the normals point inward, and without orienting the
+  // mesh first the L2,1 partition splits the cube's sides.
+  const Mesh original = cube(4);
+  Mesh m = original;
+  uint32_t seed = 5, flipped = 0;
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    seed = seed * 1664525u + 1013904223u;
+    if (seed >> 31) std::swap(m.indices[3 * f + 1], m.indices[3 * f + 2]), ++flipped;
+  }
+  REQUIRE(flipped > 0);
+  const ShapeApproximation ref = approximate_shape(original, with_proxies(6));
+  const ShapeApproximation s = approximate_shape(m, with_proxies(6));
+  CHECK(ref.reoriented_faces == 0);
+  CHECK(s.reoriented_faces == flipped);
+  CHECK(s.labels == ref.labels);
+  CHECK(s.distortion == ref.distortion);
+  CHECK(s.mesh.indices == ref.mesh.indices);
+  CHECK(s.mesh.positions == ref.mesh.positions);
+  check_closed_manifold(s);
+}
+
 TEST_CASE("approximate: chamfered box keeps its 10 sharp corners with 7 proxies") {
   Mesh m = prism(kChamferedSection, 1.0, 4, 4);
   ShapeApproximation s = approximate_shape(m, with_proxies(7));

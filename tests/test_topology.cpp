@@ -12,6 +12,7 @@
 #include "meshcvt/error.h"
 #include "meshcvt/mesh.h"
 #include "meshcvt/topology.h"
+#include "test_meshes.h"
 
 using meshcvt::kNone;
 using meshcvt::Mesh;
@@ -23,6 +24,25 @@ Mesh tetrahedron() {
   Mesh m;
   m.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
   m.indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};  // outward, consistently oriented
+  return m;
+}
+
+Mesh moebius_strip() {
+  // A strip of n quads whose ends are glued with a half twist.
+  const int n = 8;
+  Mesh m;
+  for (int i = 0; i < n; ++i) {
+    double u = 2 * M_PI * i / n, w = u / 2;
+    for (int s = -1; s <= 1; s += 2)
+      m.positions.insert(m.positions.end(), {float((2 + s * 0.5 * std::cos(w)) * std::cos(u)),
+                                             float((2 + s * 0.5 * std::cos(w)) * std::sin(u)), float(s * 0.5 * std::sin(w))});
+  }
+  for (int i = 0; i < n; ++i) {
+    uint32_t a = 2 * i, b = 2 * i + 1, c, d;
+    if (i + 1 < n) c = 2 * (i + 1) + 1, d = 2 * (i + 1);
+    else c = 0, d = 1;  // the twist: the two sides swap
+    m.indices.insert(m.indices.end(), {a, d, c, a, c, b});
+  }
   return m;
 }
 
@@ -372,21 +392,7 @@ TEST_CASE("topology: inconsistent orientation is adjacent but counted") {
 }
 
 TEST_CASE("topology: Moebius strip is non-orientable") {
-  // A strip of n quads whose ends are glued with a half twist.
-  const int n = 8;
-  Mesh m;
-  for (int i = 0; i < n; ++i) {
-    double u = 2 * M_PI * i / n, w = u / 2;
-    for (int s = -1; s <= 1; s += 2)
-      m.positions.insert(m.positions.end(), {float((2 + s * 0.5 * std::cos(w)) * std::cos(u)),
-                                             float((2 + s * 0.5 * std::cos(w)) * std::sin(u)), float(s * 0.5 * std::sin(w))});
-  }
-  for (int i = 0; i < n; ++i) {
-    uint32_t a = 2 * i, b = 2 * i + 1, c, d;
-    if (i + 1 < n) c = 2 * (i + 1) + 1, d = 2 * (i + 1);
-    else c = 0, d = 1;  // the twist: the two sides swap
-    m.indices.insert(m.indices.end(), {a, d, c, a, c, b});
-  }
+  Mesh m = moebius_strip();
   Topology t = meshcvt::build_topology(m);
   check_against_brute_force(m, t);
   CHECK(t.boundary_loops == 1);
@@ -470,4 +476,129 @@ TEST_CASE("topology: large shuffled torus matches brute-force invariants on both
     }
   }
   CHECK(listed == 3ull * nf);
+}
+
+// ---- orient_consistently
+
+namespace {
+
+// Six times the signed volume enclosed by a closed mesh (positive: faces point outward).
+double signed_volume6(const Mesh& m) {
+  double v = 0;
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    const float* a = &m.positions[3 * size_t(m.indices[3 * f])];
+    const float* b = &m.positions[3 * size_t(m.indices[3 * f + 1])];
+    const float* c = &m.positions[3 * size_t(m.indices[3 * f + 2])];
+    v += double(a[0]) * (double(b[1]) * c[2] - double(b[2]) * c[1]) -
+         double(a[1]) * (double(b[0]) * c[2] - double(b[2]) * c[0]) +
+         double(a[2]) * (double(b[0]) * c[1] - double(b[1]) * c[0]);
+  }
+  return v;
+}
+
+void flip_face(Mesh& m, size_t f) { std::swap(m.indices[3 * f + 1], m.indices[3 * f + 2]); }
+
+// Flips about half of the faces of [begin, end), chosen by a fixed pseudo-random sequence.
+size_t shuffle_orientation(Mesh& m, size_t begin, size_t end, uint32_t seed) {
+  size_t flipped = 0;
+  for (size_t f = begin; f < end; ++f) {
+    seed = seed * 1664525u + 1013904223u;
+    if (seed >> 31) {
+      flip_face(m, f);
+      ++flipped;
+    }
+  }
+  return flipped;
+}
+
+}  // namespace
+
+TEST_CASE("orient_consistently: a closed surface with faces flipped at random comes back outward") {
+  struct Case {
+    const char* name;
+    Mesh mesh;
+  };
+  Mesh far = meshcvt::test::icosphere(2);
+  for (size_t i = 0; i < far.positions.size(); i += 3) far.positions[i] += 1000.f;  // digits far from the origin
+  std::vector<Case> cases;
+  cases.push_back({"icosphere", meshcvt::test::icosphere(3)});
+  cases.push_back({"torus", meshcvt::test::torus(30, 12)});
+  cases.push_back({"icosphere at x = 1000", far});
+  for (Case& c : cases) {
+    CAPTURE(std::string(c.name));
+    const Mesh original = c.mesh;
+    REQUIRE(signed_volume6(original) > 0);
+    REQUIRE(meshcvt::build_topology(original).orientation_flips == 0);
+    for (uint32_t seed : {1u, 7u, 12345u}) {
+      Mesh m = original;
+      const size_t flipped = shuffle_orientation(m, 0, m.face_count(), seed);
+      Topology t = meshcvt::build_topology(m);
+      REQUIRE(t.orientation_flips > 0);
+      CHECK(meshcvt::orient_consistently(m, t) == flipped);
+      CHECK(m.indices == original.indices);  // every flipped face swapped back, no other touched
+      CHECK(t.orientation_flips == 0);       // the topology was rebuilt for the flipped faces
+      CHECK(t.face_adjacent == meshcvt::build_topology(m).face_adjacent);
+    }
+    // All faces flipped: consistent, inward. The function leaves a consistent mesh as it is.
+    Mesh inward = original;
+    for (size_t f = 0; f < inward.face_count(); ++f) flip_face(inward, f);
+    Topology t = meshcvt::build_topology(inward);
+    CHECK(meshcvt::orient_consistently(inward, t) == 0);
+    CHECK(signed_volume6(inward) < 0);
+  }
+}
+
+TEST_CASE("orient_consistently: an open surface keeps the orientation of its larger area") {
+  const Mesh original = grid(6, 6);  // 72 faces, two per unit square, x = 0..6
+  const uint32_t* orig = original.indices.data();
+  auto square_x = [&](size_t f) {  // the x of a face's lowest corner: the column of its square
+    float x = 1e9f;
+    for (int k = 0; k < 3; ++k) x = std::min(x, original.positions[3 * size_t(orig[3 * f + k])]);
+    return x;
+  };
+  // Columns 0 and 1 (a third of the area) flipped: they are flipped back.
+  Mesh m = original;
+  size_t minority = 0;
+  for (size_t f = 0; f < m.face_count(); ++f)
+    if (square_x(f) < 2) flip_face(m, f), ++minority;
+  Topology t = meshcvt::build_topology(m);
+  CHECK(meshcvt::orient_consistently(m, t) == minority);
+  CHECK(m.indices == original.indices);
+  // Columns 0 to 3 flipped (two thirds): the other third follows them.
+  m = original;
+  size_t majority = 0;
+  for (size_t f = 0; f < m.face_count(); ++f)
+    if (square_x(f) < 4) flip_face(m, f), ++majority;
+  t = meshcvt::build_topology(m);
+  CHECK(meshcvt::orient_consistently(m, t) == m.face_count() - majority);
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    CAPTURE(f);
+    CHECK(m.indices[3 * f] == orig[3 * f]);
+    CHECK(m.indices[3 * f + 1] == orig[3 * f + 2]);
+    CHECK(m.indices[3 * f + 2] == orig[3 * f + 1]);
+  }
+  CHECK(t.orientation_flips == 0);
+}
+
+TEST_CASE("orient_consistently: a Moebius strip is left as it is, the other parts are oriented") {
+  const Mesh strip = moebius_strip();
+  const Mesh sphere = meshcvt::test::icosphere(1);
+  Mesh m = meshcvt::test::combine(strip, sphere, 10);
+  const size_t flipped = shuffle_orientation(m, strip.face_count(), m.face_count(), 3);
+  REQUIRE(flipped > 0);
+  Topology t = meshcvt::build_topology(m);
+  REQUIRE(t.nonorientable_components == 1);
+  CHECK(meshcvt::orient_consistently(m, t) == flipped);
+  CHECK(std::equal(strip.indices.begin(), strip.indices.end(), m.indices.begin()));
+  CHECK(t.nonorientable_components == 1);
+  CHECK(t.orientation_flips == meshcvt::build_topology(strip).orientation_flips);  // the strip's own
+  Mesh sphere_part;
+  sphere_part.positions = m.positions;
+  sphere_part.indices.assign(m.indices.begin() + 3 * strip.face_count(), m.indices.end());
+  CHECK(signed_volume6(sphere_part) > 0);
+  // The strip alone: nothing can be done, nothing is touched.
+  Mesh alone = strip;
+  Topology ta = meshcvt::build_topology(alone);
+  CHECK(meshcvt::orient_consistently(alone, ta) == 0);
+  CHECK(alone.indices == strip.indices);
 }

@@ -198,6 +198,9 @@ struct ShapeApproximation {
 
   std::vector<MeshingFix> fixes;  ///< in the order they were applied
   MeshingStats stats;
+  /// approximate_shape only: faces flipped so that every orientable component is consistently
+  /// oriented (orient_consistently) before anything else; the output follows the flipped faces.
+  uint64_t reoriented_faces = 0;
 
   /// The clustering (empty for mesh_partition). After teleports or error-driven rounds, `labels` /
   /// `generators` are those of the end result and `history` goes on over every teleport and round:
@@ -212,7 +215,9 @@ struct ShapeApproximation {
   double partition_seconds = 0, refine_seconds = 0, meshing_seconds = 0;
 };
 
-/// Partitions `mesh` with the L2,1 metric and meshes the partition (the whole pipeline).
+/// Partitions `mesh` with the L2,1 metric and meshes the partition (the whole pipeline). A mesh
+/// whose orientable components are not consistently oriented is oriented first, on a copy
+/// (orient_consistently; reoriented_faces).
 ///
 /// mesh     : triangle mesh; topology : build_topology(mesh).
 /// options  : proxies or max_error (exactly one), meshing options, device, threads.

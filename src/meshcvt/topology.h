@@ -74,6 +74,21 @@ struct Topology {
 ///         large meshes; the result does not depend on it.
 Topology build_topology(const Mesh& mesh);
 
+/// Orients every orientable component consistently: flips faces (swaps their corners 1 and 2) so
+/// that across each manifold edge the two faces run along it in opposite directions, as a
+/// scanner's or exporter's mesh with randomly ordered triangles needs before its dual, its normals
+/// or its curvature mean anything. A closed component (no boundary or non-manifold edge) is made to
+/// face outward (positive signed volume); an open one keeps the orientation of the larger part of
+/// its area (on a tie, its lowest face's). Non-orientable components
+/// (topology.nonorientable_components) are left as they are; so is every face of a component
+/// already consistent. Positions, face order and connectivity do not change.
+///
+/// Input : mesh and topology = build_topology(mesh).
+/// Output: the number of faces flipped; when it is > 0, topology is rebuilt for the flipped mesh
+///         (orientation_flips is then 0 unless a component is non-orientable). O(F + V); nothing is
+///         allocated when topology.orientation_flips == 0.
+uint64_t orient_consistently(Mesh& mesh, Topology& topology);
+
 /// Summary printed by `meshcvt info`. Counts are those of Topology; lengths and areas are in the
 /// input's units.
 struct MeshInfo {

@@ -102,6 +102,49 @@ r = json.load(open(sys.argv[1]))
 assert r['fix_loop']['defects_remain'] and r['fixes'] == [] and len(r['defects']) == r['fix_loop']['remaining_defects'] > 0
 PY
 
+# Faces oriented at random (as libcgal-demo's boeing and *-shuffled meshes): the command orients
+# each part first, says so, and the output is a valid closed surface facing outward; with and
+# without --gradation (whose curvature is computed on the input before anything else).
+python3 - "$data/elephant.off" "$tmp/shuffled.off" >"$tmp/flipped" <<'PY'
+import sys
+tok = open(sys.argv[1]).read().split()
+nv, nf = int(tok[1]), int(tok[2])
+verts = [tok[4 + 3 * i:7 + 3 * i] for i in range(nv)]
+pos, faces, seed, flipped = 4 + 3 * nv, [], 1, 0
+for _ in range(nf):
+    f = tok[pos + 1:pos + 4]; pos += 4
+    seed = (seed * 1664525 + 1013904223) % 2**32
+    if seed >> 31:
+        f = [f[0], f[2], f[1]]; flipped += 1
+    faces.append(f)
+with open(sys.argv[2], 'w') as out:
+    out.write(f"OFF\n{nv} {nf} 0\n")
+    out.writelines(" ".join(v) + "\n" for v in verts)
+    out.writelines("3 " + " ".join(f) + "\n" for f in faces)
+print(flipped)
+PY
+for extra in "" "--gradation 1"; do
+  "$cli" coarsen "$tmp/shuffled.off" -n 120 -o "$tmp/shuffled-out.off" --device cpu --no-error $extra \
+    --report "$tmp/shuffled.json" >"$tmp/out" 2>"$tmp/err" || fail "shuffled elephant $extra: $(cat "$tmp/err")"
+  grep -q "note: .*shuffled.off: flipped $(cat "$tmp/flipped") of 5558 faces so that each part is consistently oriented" \
+    "$tmp/err" || fail "no orientation note ($extra): $(cat "$tmp/err")"
+  grep -q "warning" "$tmp/err" && fail "warning for the shuffled elephant ($extra): $(cat "$tmp/err")"
+  check_off "$tmp/shuffled-out.off" 120 -4
+  python3 - "$tmp/shuffled.json" "$(cat "$tmp/flipped")" "$tmp/shuffled-out.off" <<'PY' || fail "shuffled elephant report or volume ($extra)"
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r['reoriented_faces'] == int(sys.argv[2]) and r['defects'] == [], r['reoriented_faces']
+tok = open(sys.argv[3]).read().split()
+nv, nf = int(tok[1]), int(tok[2])
+p = [tuple(map(float, tok[4 + 3 * i:7 + 3 * i])) for i in range(nv)]
+vol = 0.0
+for k in range(nf):
+    a, b, c = (p[int(x)] for x in tok[4 + 3 * nv + 4 * k + 1:4 + 3 * nv + 4 * k + 4])
+    vol += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])
+assert vol > 0, vol
+PY
+done
+
 # n too small for a genus-3 surface (Heawood: 10 vertices at least): exit 2, numbers named, no output
 set +e
 "$cli" coarsen "$data/elephant.off" -n 9 -o "$tmp/small.off" --device cpu >"$tmp/out" 2>"$tmp/err"
