@@ -1736,16 +1736,18 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
   detail::check_fit_angles(options.coarsen);
   if (!(options.coarsen.relax_max_normal_turn_deg >= 0 && options.coarsen.relax_max_normal_turn_deg <= 180))
     throw OptionError("relax: the normal turn limit must be within [0, 180] degrees");
-  // A mesh whose triangles are ordered at random (boeing, the *-shuffled meshes of libcgal-demo)
-  // has a dual whose triangles face every way: orient a copy first. The labels and the coarse
-  // mesh's vertices do not depend on the faces' orientation, only the dual's triangles do.
-  if (topology.orientation_flips > 0) {
-    Mesh oriented = mesh;
-    Topology oriented_topology = topology;
-    const uint64_t flipped = orient_consistently(oriented, oriented_topology);
-    if (flipped > 0) {
-      CoarsenMeshResult out = coarsen_mesh(oriented, oriented_topology, options);
-      out.reoriented_faces = flipped;
+  // A surface that is a manifold but for pinched vertices (cow: two parts touching at a point) or
+  // whose triangles are ordered at random (boeing, the *-shuffled meshes of libcgal-demo) has a
+  // dual that is pinched too, or whose triangles face every way: prepare a copy first. The labels
+  // and the coarse mesh's vertices depend on neither, only the dual's triangles do.
+  if (topology.orientation_flips > 0 || topology.nonmanifold_vertices > 0) {
+    Mesh prepared = mesh;
+    Topology prepared_topology = topology;
+    const SurfacePreparation p = prepare_surface(prepared, prepared_topology);
+    if (p.split_vertices > 0 || p.flipped_faces > 0) {
+      CoarsenMeshResult out = coarsen_mesh(prepared, prepared_topology, options);
+      out.split_vertices = p.split_vertices;
+      out.reoriented_faces = p.flipped_faces;
       return out;
     }
   }

@@ -651,4 +651,92 @@ uint64_t orient_consistently(Mesh& mesh, Topology& topology) {
   return flipped;
 }
 
+uint64_t split_pinched_vertices(Mesh& mesh, Topology& topology) {
+  assert(topology.vertex_face_offsets.size() == mesh.vertex_count() + 1);
+  if (topology.nonmanifold_vertices == 0) return 0;
+  const uint32_t* indices = mesh.indices.data();
+  // The fans of every vertex are found on the unchanged mesh first, then the copies are made:
+  // (vertex, first face of the fan's list, end) per fan that gets a copy.
+  struct Fan {
+    uint32_t vertex, begin, end;
+  };
+  std::vector<Fan> fans;
+  std::vector<uint32_t> fan_faces, parent, others, order;
+  std::vector<uint8_t> seen;
+  const size_t nv = mesh.vertex_count();
+  for (uint32_t v = 0; v < nv; ++v) {
+    const uint32_t* faces = topology.vertex_faces.data() + topology.vertex_face_offsets[v];
+    const uint32_t count = topology.vertex_face_offsets[v + 1] - topology.vertex_face_offsets[v];
+    if (count < 2) continue;
+    // Fans: v's faces joined across the manifold edges at v (face_adjacent). Collapsed faces have
+    // no edges; they stay on v.
+    parent.resize(count);
+    for (uint32_t i = 0; i < count; ++i) parent[i] = i;
+    auto find = [&](uint32_t i) {
+      while (parent[i] != i) i = parent[i] = parent[parent[i]];
+      return i;
+    };
+    auto local = [&](uint32_t f) {  // f's position in v's (increasing) list
+      return uint32_t(std::lower_bound(faces, faces + count, f) - faces);
+    };
+    others.clear();
+    for (uint32_t i = 0; i < count; ++i) {
+      const uint32_t f = faces[i];
+      if (is_collapsed(indices, f)) continue;
+      for (uint32_t e = 0; e < 3; ++e) {
+        const uint32_t a = indices[3 * f + e], b = indices[3 * f + (e + 1) % 3];
+        if (a != v && b != v) continue;
+        others.push_back(a == v ? b : a);
+        const uint32_t g = topology.face_adjacent[3 * f + e];
+        if (g == kNone) continue;
+        const uint32_t j = local(g);
+        assert(j < count && faces[j] == g);
+        parent[find(i)] = find(j);
+      }
+    }
+    // A vertex of a non-manifold edge (an edge of three or more faces: some w met three times or
+    // more among v's edges) is left as it is: copies would open the edge into a slit.
+    std::sort(others.begin(), others.end());
+    bool nonmanifold_edge = false;
+    for (size_t i = 2; i < others.size() && !nonmanifold_edge; ++i) nonmanifold_edge = others[i] == others[i - 2];
+    if (nonmanifold_edge) continue;
+    // Fans (their roots) in the order of their lowest face; the first keeps v.
+    order.clear();
+    seen.assign(count, 0);
+    for (uint32_t i = 0; i < count; ++i) {
+      if (is_collapsed(indices, faces[i])) continue;
+      const uint32_t r = find(i);
+      if (!seen[r]) seen[r] = 1, order.push_back(r);
+    }
+    if (order.size() < 2) continue;
+    for (size_t k = 1; k < order.size(); ++k) {
+      Fan fan{v, uint32_t(fan_faces.size()), 0};
+      for (uint32_t i = 0; i < count; ++i)
+        if (!is_collapsed(indices, faces[i]) && find(i) == order[k]) fan_faces.push_back(faces[i]);
+      fan.end = uint32_t(fan_faces.size());
+      fans.push_back(fan);
+    }
+  }
+  if (fans.empty()) return 0;
+  mesh.positions.reserve(mesh.positions.size() + 3 * fans.size());
+  for (const Fan& fan : fans) {
+    const uint32_t copy = uint32_t(mesh.vertex_count());
+    for (int k = 0; k < 3; ++k) mesh.positions.push_back(mesh.positions[3 * size_t(fan.vertex) + k]);
+    for (uint32_t i = fan.begin; i < fan.end; ++i)
+      for (int k = 0; k < 3; ++k) {
+        uint32_t& corner = mesh.indices[3 * size_t(fan_faces[i]) + k];
+        if (corner == fan.vertex) corner = copy;
+      }
+  }
+  topology = build_topology(mesh);
+  return fans.size();
+}
+
+SurfacePreparation prepare_surface(Mesh& mesh, Topology& topology) {
+  SurfacePreparation p;
+  p.split_vertices = split_pinched_vertices(mesh, topology);
+  p.flipped_faces = orient_consistently(mesh, topology);
+  return p;
+}
+
 }  // namespace meshcvt

@@ -228,6 +228,34 @@ TEST_CASE("coarsen_mesh: a surface whose faces are oriented at random comes out 
   CHECK(run(original, 12).reoriented_faces == 0);
 }
 
+TEST_CASE("coarsen_mesh: a surface pinched at one vertex comes out as the surface it was") {
+  // As libcgal-demo's cow once its identical positions are welded: two parts of the surface touch
+  // at one vertex. Here the elephant's vertices 242 and 1792, 0.035 apart (the mesh is 1 across)
+  // and more than 8 edges apart on the surface, become one. Without splitting it again, the
+  // component is not a manifold, the fix loop's fallbacks skip it, and defects remained at every
+  // count tried (20, 50, 100, 300).
+  const Mesh apart = elephant();
+  REQUIRE(apart.vertex_count() > 1792);
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double d = double(apart.positions[3 * 242 + k]) - apart.positions[3 * 1792 + k];
+    d2 += d * d;
+  }
+  REQUIRE(d2 < 0.04 * 0.04);
+  Mesh pinched = apart;
+  for (uint32_t& i : pinched.indices)
+    if (i == 1792) i = 242;
+  const Topology t = build_topology(pinched);
+  REQUIRE(t.nonmanifold_vertices == 1);
+  REQUIRE(t.component_count == 1);
+  for (uint32_t n : {50u, 300u}) {
+    CAPTURE(n);
+    CoarsenMeshResult r = run(pinched, n);
+    CHECK(r.split_vertices == 1);
+    check_valid(apart, r, n);  // the elephant's chi, -4, not the pinched surface's -5
+  }
+}
+
 TEST_CASE("coarsen_mesh: the elephant (genus 3) at small and large n, every fix reported") {
   Mesh m = elephant();
   REQUIRE(inspect(m).chi() == -4);

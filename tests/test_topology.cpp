@@ -602,3 +602,62 @@ TEST_CASE("orient_consistently: a Moebius strip is left as it is, the other part
   CHECK(meshcvt::orient_consistently(alone, ta) == 0);
   CHECK(alone.indices == strip.indices);
 }
+
+// ---- split_pinched_vertices
+
+TEST_CASE("split_pinched_vertices: each fan of a pinched vertex but the first gets its own copy") {
+  const uint32_t n = 8;
+  const Mesh cone = fan(n, true);  // faces 0..n-1 around the apex above, n..2n-1 below
+  Mesh m = cone;
+  // A third fan at the apex: a flat ring of radius 2 (faces 2n..3n-1), and a collapsed face on it.
+  const uint32_t base = uint32_t(m.vertex_count());
+  for (uint32_t i = 0; i < n; ++i)
+    m.positions.insert(m.positions.end(), {float(2 * std::cos(2 * M_PI * i / n)), float(2 * std::sin(2 * M_PI * i / n)), 0});
+  for (uint32_t i = 0; i < n; ++i) m.indices.insert(m.indices.end(), {0, base + i, base + (i + 1) % n});
+  m.indices.insert(m.indices.end(), {0, 0, base});
+  Topology t = meshcvt::build_topology(m);
+  REQUIRE(t.nonmanifold_vertices == 1);
+  const meshcvt::MeshInfo before = meshcvt::mesh_info(m, t);
+  const Mesh original = m;
+  CHECK(meshcvt::split_pinched_vertices(m, t) == 2);
+  REQUIRE(m.vertex_count() == original.vertex_count() + 2);
+  for (uint32_t c : {uint32_t(original.vertex_count()), uint32_t(original.vertex_count() + 1)})
+    for (int k = 0; k < 3; ++k) CHECK(m.positions[3 * c + k] == original.positions[k]);  // copies of the apex
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    CAPTURE(f);
+    // the fan with the lowest face keeps the apex; the others take the copies in their order
+    const uint32_t apex = f < n ? 0 : f < 2 * n ? uint32_t(original.vertex_count()) : f < 3 * n ? uint32_t(original.vertex_count() + 1) : 0;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t was = original.indices[3 * f + k];
+      CHECK(m.indices[3 * f + k] == (was == 0 ? apex : was));
+    }
+  }
+  CHECK(t.nonmanifold_vertices == 0);  // the topology was rebuilt
+  check_against_brute_force(m, t);
+  const meshcvt::MeshInfo after = meshcvt::mesh_info(m, t);
+  CHECK(after.euler_characteristic == before.euler_characteristic + 2);
+  CHECK(after.boundary_loops == before.boundary_loops);
+  CHECK(after.components == before.components);
+  // Nothing left to split.
+  CHECK(meshcvt::split_pinched_vertices(m, t) == 0);
+}
+
+TEST_CASE("split_pinched_vertices: vertices of a non-manifold edge and manifold meshes are left alone") {
+  // Three triangles on the edge (0, 1), a book of three pages: 0 and 1 have three fans each.
+  Mesh book;
+  book.positions = {0, 0, 0, 0, 0, 1, 1, 0, 0, -1, 0, 0, 0, 1, 0};
+  book.indices = {0, 1, 2, 1, 0, 3, 0, 1, 4};
+  Topology t = meshcvt::build_topology(book);
+  REQUIRE(t.nonmanifold_vertices == 2);
+  REQUIRE(t.nonmanifold_edges == 1);
+  const Mesh original = book;
+  CHECK(meshcvt::split_pinched_vertices(book, t) == 0);
+  CHECK(book.indices == original.indices);
+  CHECK(book.positions == original.positions);
+  Mesh sphere = meshcvt::test::icosphere(2);
+  const Mesh sphere_before = sphere;
+  Topology ts = meshcvt::build_topology(sphere);
+  CHECK(meshcvt::split_pinched_vertices(sphere, ts) == 0);
+  CHECK(sphere.indices == sphere_before.indices);
+  CHECK(sphere.positions == sphere_before.positions);
+}

@@ -128,12 +128,13 @@ void run_coarsen(const CoarsenArgs& a) {
           ? subdivision_levels_for(input_faces, a.clusters, subdivision_faces_per_cluster(co.placement))
           : unsigned(subdivide);
   std::vector<float> density;  // empty: uniform
-  // Faces flipped so that each part is consistently oriented (orient_consistently): the curvature
-  // behind the density needs consistent normals as much as the dual does.
-  uint64_t reoriented = 0;
+  // Pinched vertices split and faces flipped so that each part is consistently oriented
+  // (prepare_surface): the curvature behind the density needs consistent normals as much as the
+  // dual does.
+  SurfacePreparation prepared;
   if (a.gradation > 0) {
     Topology input_topology = build_topology(mesh);
-    reoriented = orient_consistently(mesh, input_topology);
+    prepared = prepare_surface(mesh, input_topology);
     density = curvature_density(mesh, input_topology, a.gradation);
   }
   if (subdivision_levels > 0) {
@@ -155,10 +156,18 @@ void run_coarsen(const CoarsenArgs& a) {
                       std::to_string(mesh.face_count()) + " faces of " + a.input +
                       ": ask for fewer, or add --subdivide auto to refine the input first");
   Topology topology = build_topology(mesh);
-  reoriented += orient_consistently(mesh, topology);
-  if (reoriented > 0 && !a.quiet)
+  {
+    const SurfacePreparation more = prepare_surface(mesh, topology);  // nothing left after the first
+    prepared.split_vertices += more.split_vertices;
+    prepared.flipped_faces += more.flipped_faces;
+  }
+  if (prepared.split_vertices > 0 && !a.quiet)
+    std::fprintf(stderr, "meshcvt: note: %s: split %llu pinched vert%s (where parts of the surface touch at a point)\n",
+                 a.input.c_str(), (unsigned long long)prepared.split_vertices,
+                 prepared.split_vertices == 1 ? "ex" : "ices");
+  if (prepared.flipped_faces > 0 && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s: flipped %llu of %zu faces so that each part is consistently oriented\n",
-                 a.input.c_str(), (unsigned long long)reoriented, input_faces);
+                 a.input.c_str(), (unsigned long long)prepared.flipped_faces, input_faces);
   // The whole job (coarsen_mesh.cpp): clusters per component, clustering, fixes until the dual is a
   // valid manifold, the dual.
   CoarsenMeshOptions job_options;
@@ -189,7 +198,8 @@ void run_coarsen(const CoarsenArgs& a) {
     j.value("input", a.input).value("faces", uint64_t(mesh.face_count())).value("clusters", a.clusters)
         .value("metric", a.metric).value("placement", a.placement).value("device", c.device)
         .value("iterations", c.iterations).value("converged", c.converged);
-    j.value("input_faces", uint64_t(input_faces)).value("reoriented_faces", reoriented + job.reoriented_faces)
+    j.value("input_faces", uint64_t(input_faces)).value("split_vertices", prepared.split_vertices + job.split_vertices)
+        .value("reoriented_faces", prepared.flipped_faces + job.reoriented_faces)
         .value("subdivision_levels", subdivision_levels)
         .value("gradation", a.gradation);
     j.begin_object("output").value("vertices", uint64_t(r.mesh.vertex_count())).value("faces", uint64_t(r.mesh.face_count()))

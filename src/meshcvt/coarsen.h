@@ -364,8 +364,10 @@ struct CoarsenMeshResult {
   /// Defects are left (coarse.defects): no attempt removed them all; `clustering` is then the one
   /// with the fewest defects.
   bool defects_remain = false;
-  /// Faces flipped so that every orientable component is consistently oriented
-  /// (orient_consistently) before anything else: the coarse mesh follows the flipped faces.
+  /// Before anything else (prepare_surface): copies of pinched vertices made
+  /// (split_pinched_vertices), and faces flipped so that every orientable component is
+  /// consistently oriented (orient_consistently); the coarse mesh follows the flipped faces.
+  uint64_t split_vertices = 0;
   uint64_t reoriented_faces = 0;
   double cluster_seconds = 0;  ///< the first cluster() call
   double fix_seconds = 0;      ///< defect searches, fixes and the fix rounds' cluster() calls (0 when the
@@ -375,8 +377,9 @@ struct CoarsenMeshResult {
 
 /// Coarsens `mesh` to exactly n = options.cluster.clusters vertices (Fan et al. 6.1) and makes the
 /// clustering valid first, so that its dual is a manifold like the input:
-///  0. a mesh whose orientable components are not consistently oriented is oriented first, on a
-///     copy (orient_consistently, reoriented_faces);
+///  0. a mesh with pinched vertices or whose orientable components are not consistently oriented
+///     is prepared first, on a copy (prepare_surface: split_vertices, reoriented_faces), so that a
+///     surface that is a manifold but for those counts as one below;
 ///  1. allocate_component_clusters shares n among the components (OptionError when n is too small);
 ///  2. cluster() with those counts per component (on a single-component mesh: exactly the plain
 ///     cluster() result);

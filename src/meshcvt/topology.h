@@ -89,6 +89,33 @@ Topology build_topology(const Mesh& mesh);
 ///         allocated when topology.orientation_flips == 0.
 uint64_t orient_consistently(Mesh& mesh, Topology& topology);
 
+/// Gives each fan of faces around a pinched vertex its own copy of the vertex (same position), so
+/// that parts of the surface that touch at a point (two spheres sharing a vertex, a hole's rim
+/// touching another's, a scan's pinched fold) no longer do. A fan is a set of faces at the vertex
+/// joined across its manifold edges; the fan with the lowest face keeps the vertex, the others get
+/// copies appended to the positions in the order of (vertex, lowest face). Vertices of a
+/// non-manifold edge (three or more faces) are left as they are: copies would open that edge into
+/// a slit. Collapsed faces stay on the vertex.
+///
+/// Input : mesh and topology = build_topology(mesh).
+/// Output: the number of copies added (new vertices); when it is > 0, topology is rebuilt for the
+///         changed mesh, whose Euler characteristic grows by as much. Faces, their order and
+///         orientation do not change. O(F + V); nothing is done when topology.nonmanifold_vertices
+///         == 0.
+uint64_t split_pinched_vertices(Mesh& mesh, Topology& topology);
+
+/// What prepare_surface changed.
+struct SurfacePreparation {
+  uint64_t split_vertices = 0;  ///< split_pinched_vertices' copies
+  uint64_t flipped_faces = 0;   ///< orient_consistently's flips
+};
+
+/// split_pinched_vertices, then orient_consistently: what `meshcvt coarsen` and `approximate` do to
+/// their input before clustering it, so that the coarse mesh of a surface that is a manifold but
+/// for pinched vertices and the orientation of its triangles comes out a valid manifold. Same
+/// inputs and outputs as those two.
+SurfacePreparation prepare_surface(Mesh& mesh, Topology& topology);
+
 /// Summary printed by `meshcvt info`. Counts are those of Topology; lengths and areas are in the
 /// input's units.
 struct MeshInfo {

@@ -145,6 +145,33 @@ assert vol > 0, vol
 PY
 done
 
+# Two parts of the surface touching at one vertex (the elephant's vertices 242 and 1792, 0.035
+# apart, made one; as libcgal-demo's cow once welded): the command splits the vertex again, says
+# so, and the output is the elephant's closed surface (chi -4), not the pinched one's (-5).
+python3 - "$data/elephant.off" "$tmp/pinched.off" <<'PY'
+import sys
+tok = open(sys.argv[1]).read().split()
+nv, nf = int(tok[1]), int(tok[2])
+with open(sys.argv[2], 'w') as out:
+    out.write(f"OFF\n{nv} {nf} 0\n")
+    out.writelines(" ".join(tok[4 + 3 * i:7 + 3 * i]) + "\n" for i in range(nv))
+    pos = 4 + 3 * nv
+    for _ in range(nf):
+        f = ["242" if x == "1792" else x for x in tok[pos + 1:pos + 4]]; pos += 4
+        out.write("3 " + " ".join(f) + "\n")
+PY
+"$cli" coarsen "$tmp/pinched.off" -n 100 -o "$tmp/pinched-out.off" --device cpu --no-error \
+  --report "$tmp/pinched.json" >"$tmp/out" 2>"$tmp/err" || fail "pinched elephant: $(cat "$tmp/err")"
+grep -q "note: .*pinched.off: split 1 pinched vertex" "$tmp/err" || fail "no split note: $(cat "$tmp/err")"
+grep -q "warning" "$tmp/err" && fail "warning for the pinched elephant: $(cat "$tmp/err")"
+check_off "$tmp/pinched-out.off" 100 -4
+python3 - "$tmp/pinched.json" <<'PY' || fail "pinched elephant report"
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r['split_vertices'] == 1 and r['reoriented_faces'] == 0 and r['defects'] == [], r
+assert r['output']['input_euler_characteristic'] == -4, r['output']
+PY
+
 # n too small for a genus-3 surface (Heawood: 10 vertices at least): exit 2, numbers named, no output
 set +e
 "$cli" coarsen "$data/elephant.off" -n 9 -o "$tmp/small.off" --device cpu >"$tmp/out" 2>"$tmp/err"
