@@ -311,7 +311,8 @@ class RegionCheck {
 
   // faces[i] would become piece side[i] (0 .. pieces-1). Lower is better: 1000 per piece that is not
   // connected, 100 per piece that is not a disk, for each of its neighbours (the boundary, the other
-  // pieces, other clusters) it would share two borders with, 10 per piece with too few neighbours;
+  // pieces, other clusters) it would share two borders with, 10 per piece with too few neighbours
+  // (3; 2 for a piece on the mesh boundary, where a cluster met only at a boundary vertex counts);
   // plus the weight imbalance (max - min) / total in [0, 1]. Below 10: every piece is fit.
   double score(const std::vector<uint32_t>& faces, const std::vector<uint8_t>& side, uint8_t pieces,
                const std::vector<uint32_t>& labels) {
@@ -401,8 +402,34 @@ class RegionCheck {
       if (chain_ends > 2) s += 100;
       i = j;
     }
+    if (open && neighbours < 2) neighbours += boundary_corner_neighbours(p, labels);
     if (neighbours < (open ? 2u : 3u)) s += 10;
     return s;
+  }
+
+  // Clusters (or other pieces) that share no border with piece p but meet it at a vertex on the
+  // mesh boundary, at most 2. There the clusters of the vertex's fan, from one boundary edge to the
+  // other, make a corner polygon with the boundary, so the dual joins them: at the end of a strip
+  // one face wide (libcgal-demo's ALSTOM_TEST4), the end's cluster borders only the next one and
+  // meets the cluster after that across the strip, and that is all the strip allows.
+  uint32_t boundary_corner_neighbours(uint8_t p, const std::vector<uint32_t>& labels) {
+    uint32_t found[2] = {kNone, kNone}, count = 0;
+    auto bordering = [&](uint32_t id) {
+      for (const auto& e : ends_)
+        if (e.first == id) return true;
+      return false;
+    };
+    for (const auto& [id, v] : ends_) {
+      if (id != kBoundary) continue;
+      for (uint32_t i = topology_.vertex_face_offsets[v]; i < topology_.vertex_face_offsets[v + 1] && count < 2; ++i) {
+        const uint32_t g = topology_.vertex_faces[i];
+        if (piece_[g] == p) continue;
+        const uint32_t other = piece_[g] != kOutside ? kPiece + piece_[g] : labels[g];
+        if (other == found[0] || other == found[1] || bordering(other)) continue;
+        found[count++] = other;
+      }
+    }
+    return count;
   }
 
   const Mesh& mesh_;

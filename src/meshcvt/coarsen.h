@@ -411,8 +411,9 @@ struct CoarsenMeshResult {
 /// count; when defects_remain is false the dual has no DualDefect, which for a manifold input means
 /// a manifold output with the input's Euler characteristic and boundary loops, every component kept
 /// and every one of the n vertices used. Not guaranteed: that the loop succeeds (defects_remain
-/// says so; measured failures: a small part at its minimum count, open parts with strips narrower
-/// than a cluster); the quality of clusters that were fixed and could not be smoothed afterwards.
+/// says so; measured failures: a small part at or near its minimum count, surfaces with holes or
+/// tunnels much smaller than a cluster); the quality of clusters that were fixed and could not be
+/// smoothed afterwards.
 /// Deterministic for any thread count. Throws what allocate_component_clusters and cluster() throw,
 /// and OptionError when options.cluster.component_clusters or initial_labels are set.
 CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const CoarsenMeshOptions& options);
