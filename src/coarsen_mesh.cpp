@@ -442,6 +442,66 @@ class RegionCheck {
   std::vector<std::pair<uint32_t, uint32_t>> ends_;  // (neighbour id, vertex) per end of a border edge
 };
 
+// The input's boundary loops, an id per boundary half-edge. The dual keeps a loop as a hole only
+// while three clusters or more meet it: with two, the output closes over it (missing_boundary_edge).
+// Merges must not take a loop below three, which RegionCheck cannot see (each cluster alone is fit):
+// a hole of three edges, a missing triangle (libcgal-demo's polygon_mesh has nine), starts with its
+// three faces' clusters and may keep no fewer.
+class BoundaryLoops {
+ public:
+  BoundaryLoops(const Mesh& mesh, const Topology& topology) : mesh_(mesh), topology_(topology) {
+    // Union-find over the vertices joined by boundary edges (after prepare_surface, two per
+    // boundary vertex, so each set is one loop; elsewhere loops touching at a vertex share an id,
+    // which only makes the merges more careful).
+    std::vector<uint32_t> parent(mesh.vertex_count(), kNone);
+    auto find = [&](uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    for (size_t h = 0; h < topology.face_adjacent.size(); ++h) {
+      if (!is_boundary(h)) continue;
+      uint32_t a = mesh.indices[h], b = mesh.indices[h % 3 == 2 ? h - 2 : h + 1];
+      for (uint32_t v : {a, b})
+        if (parent[v] == kNone) parent[v] = v;
+      a = find(a), b = find(b);
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+    vertex_loop_.assign(mesh.vertex_count(), kNone);
+    for (uint32_t v = 0; v < mesh.vertex_count(); ++v)
+      if (parent[v] != kNone) {
+        const uint32_t r = find(v);
+        if (vertex_loop_[r] == kNone) vertex_loop_[r] = count_++;
+        vertex_loop_[v] = vertex_loop_[r];
+      }
+  }
+
+  uint32_t count() const { return count_; }
+
+  // The loops each cluster meets (sorted, each once), from the clusters' faces.
+  std::vector<std::vector<uint32_t>> of_clusters(const std::vector<uint32_t>& labels, uint32_t clusters) const {
+    std::vector<std::vector<uint32_t>> loops(clusters);
+    if (count_ == 0) return loops;
+    for (size_t h = 0; h < topology_.face_adjacent.size(); ++h)
+      if (is_boundary(h)) loops[labels[h / 3]].push_back(vertex_loop_[mesh_.indices[h]]);
+    for (std::vector<uint32_t>& l : loops) {
+      std::sort(l.begin(), l.end());
+      l.erase(std::unique(l.begin(), l.end()), l.end());
+    }
+    return loops;
+  }
+
+ private:
+  bool is_boundary(size_t h) const {
+    const uint32_t* t = &mesh_.indices[3 * (h / 3)];
+    return topology_.face_adjacent[h] == kNone && t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
+  }
+
+  const Mesh& mesh_;
+  const Topology& topology_;
+  std::vector<uint32_t> vertex_loop_;  // loop id of each boundary vertex, else kNone
+  uint32_t count_ = 0;
+};
+
 // The corners where four or more clusters meet, as the dual sees them: the clusters around the
 // vertex in fan order are a polygon, which coarsen_clustering triangulates avoiding diagonals that
 // are edges of the dual already (two clusters sharing a border or a boundary step) or diagonals
@@ -1122,16 +1182,23 @@ void replace_component(const Topology& topology, std::vector<uint32_t>& base, co
 // (RegionCheck: a disk, one border with each neighbour, enough neighbours), the clusters next to
 // both keep three neighbours or more, and every corner polygon around the merged cluster keeps a
 // triangulation whose diagonals are neither edges nor possible diagonals of another corner
-// (CornerPolygons, DiagonalLedger). In the dual that is an edge contraction meeting the link
-// condition, so the dual stays a manifold of the same topology. Returns the merges made; the
+// (CornerPolygons, DiagonalLedger), and no boundary loop is left to fewer than three clusters
+// (BoundaryLoops). In the dual that is an edge contraction meeting the link condition, so the dual
+// stays a manifold of the same topology. Returns the merges made; the
 // targets are met when it equals clusters - sum(targets). Labels come out renumbered to
 // [0, sum(targets)) in the order of their old ids. by_weight: lightest pair first instead (even
 // sizes; a second chance when the energy order runs into a dead end, where every merge left would
 // leave some cluster with two neighbours).
 uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck& check, CornerPolygons& corners,
-                    std::vector<uint32_t>& labels, uint32_t clusters, const std::vector<uint32_t>& targets,
-                    bool by_weight = false) {
+                    const BoundaryLoops& boundary_loops, std::vector<uint32_t>& labels, uint32_t clusters,
+                    const std::vector<uint32_t>& targets, bool by_weight = false) {
   ClusterView view = view_of(topology, data, labels, clusters);
+  // The boundary loops each cluster meets, and how many clusters meet each loop.
+  std::vector<std::vector<uint32_t>> loops = boundary_loops.of_clusters(labels, clusters);
+  std::vector<uint32_t> loop_clusters(boundary_loops.count(), 0);
+  for (const std::vector<uint32_t>& l : loops)
+    for (uint32_t id : l) ++loop_clusters[id];
+  std::vector<uint32_t> shared_loops;
   std::vector<std::vector<uint32_t>> members(clusters), neighbours(clusters);
   std::vector<double> weight = view.weight, sum(3 * size_t(clusters));
   std::vector<uint32_t> stamp(clusters, 0), count(targets.size(), 0);
@@ -1173,6 +1240,11 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
     if (corners.at(v, current)) ledger.add(corners.polygon().data(), corners.polygon().size(), +1);
   std::vector<uint32_t> old_polygons, new_polygons, old_offsets, new_offsets;
   auto fit = [&](uint32_t a, uint32_t b) {
+    shared_loops.clear();
+    std::set_intersection(loops[a].begin(), loops[a].end(), loops[b].begin(), loops[b].end(),
+                          std::back_inserter(shared_loops));
+    for (uint32_t id : shared_loops)
+      if (loop_clusters[id] <= 3) return false;  // the loop would be left to two clusters
     common.clear();
     std::set_intersection(neighbours[a].begin(), neighbours[a].end(), neighbours[b].begin(), neighbours[b].end(),
                           std::back_inserter(common));
@@ -1235,6 +1307,13 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
     for (uint32_t f : members[b]) labels[f] = a;
     members[a].insert(members[a].end(), members[b].begin(), members[b].end());
     members[b].clear();
+    for (uint32_t id : shared_loops) --loop_clusters[id];  // (fit(a, b) left them)
+    if (!loops[b].empty()) {
+      std::vector<uint32_t> joined_loops;
+      std::set_union(loops[a].begin(), loops[a].end(), loops[b].begin(), loops[b].end(), std::back_inserter(joined_loops));
+      loops[a] = std::move(joined_loops);
+      loops[b].clear();
+    }
     weight[a] += weight[b];
     for (int k = 0; k < 3; ++k) sum[3 * size_t(a) + k] += sum[3 * size_t(b) + k];
     std::vector<uint32_t> joined;
@@ -1453,16 +1532,17 @@ std::vector<uint32_t> flip_then_merge(const Mesh& mesh, const Topology& topology
 
 // merge_down by energy, and per component where that stops above its target, by weight.
 std::vector<uint32_t> merge_down_twice(const Topology& topology, const FaceData& data, RegionCheck& check,
-                                       CornerPolygons& corners, const std::vector<uint32_t>& labels,
+                                       CornerPolygons& corners, const BoundaryLoops& boundary_loops,
+                                       const std::vector<uint32_t>& labels,
                                        uint32_t clusters, const std::vector<uint32_t>& targets) {
   std::vector<uint32_t> by_energy = labels;
-  merge_down(topology, data, check, corners, by_energy, clusters, targets);
+  merge_down(topology, data, check, corners, boundary_loops, by_energy, clusters, targets);
   std::vector<uint32_t> held = clusters_per_component(topology, by_energy, *std::max_element(by_energy.begin(), by_energy.end()) + 1);
   bool stuck = false;
   for (size_t c = 0; c < targets.size(); ++c) stuck = stuck || held[c] > targets[c];
   if (!stuck) return by_energy;
   std::vector<uint32_t> by_weight = labels;
-  merge_down(topology, data, check, corners, by_weight, clusters, targets, true);
+  merge_down(topology, data, check, corners, boundary_loops, by_weight, clusters, targets, true);
   std::vector<uint32_t> held_w = clusters_per_component(topology, by_weight, *std::max_element(by_weight.begin(), by_weight.end()) + 1);
   // Take each stuck component from the weight order where that one reached its target.
   for (size_t c = 0; c < targets.size(); ++c)
@@ -1488,10 +1568,12 @@ std::vector<uint32_t> merge_down_twice(const Topology& topology, const FaceData&
 template <class DefectsOf>
 std::vector<uint32_t> merge_down_with_flips(const Mesh& mesh, const Topology& topology, const FaceData& data,
                                             RegionCheck& check, CornerPolygons& corners,
+                                            const BoundaryLoops& boundary_loops,
                                             const std::vector<uint32_t>& labels, uint32_t clusters,
                                             const std::vector<uint32_t>& targets, DefectsOf defects_of) {
   constexpr uint32_t kMaxFlips = 64;
-  std::vector<uint32_t> result = merge_down_twice(topology, data, check, corners, labels, clusters, targets);
+  std::vector<uint32_t> result =
+      merge_down_twice(topology, data, check, corners, boundary_loops, labels, clusters, targets);
   for (uint32_t flips = 0;; ++flips) {
     uint32_t count = *std::max_element(result.begin(), result.end()) + 1;
     std::vector<uint32_t> held = clusters_per_component(topology, result, count);
@@ -1502,7 +1584,7 @@ std::vector<uint32_t> merge_down_with_flips(const Mesh& mesh, const Topology& to
         flip_then_merge(mesh, topology, data, check, corners, result, count, targets, defects_of);
     if (flipped.empty()) return result;
     result = std::move(flipped);
-    merge_down(topology, data, check, corners, result, count - 1, targets);
+    merge_down(topology, data, check, corners, boundary_loops, result, count - 1, targets);
   }
 }
 
@@ -1802,6 +1884,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
     FaceData data = face_data(mesh, options.cluster.density);
     RegionCheck check(mesh, topology, data);
     CornerPolygons corners(mesh, topology);
+    const BoundaryLoops boundary_loops(mesh, topology);
     ClusterCutter cutter(mesh, topology, data, check);
     FixLoop loop(mesh, topology, options, data, check, corners, cutter);
     auto defects_of = [&](const std::vector<uint32_t>& l, uint32_t clusters) { return loop.defects_of(l, clusters); };
@@ -1842,7 +1925,8 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
       for (uint32_t c = 0; c < topology.component_count; ++c)
         if (broken[c] > 0 && broken_fine[c] == 0) targets[c] = out.allocation.clusters[c];
       std::vector<uint32_t> merged =
-          merge_down_with_flips(mesh, topology, data, check, corners, fixed.labels, fo.clusters, targets, defects_of);
+          merge_down_with_flips(mesh, topology, data, check, corners, boundary_loops, fixed.labels, fo.clusters, targets,
+                                defects_of);
       uint32_t merged_count = *std::max_element(merged.begin(), merged.end()) + 1;
       std::vector<uint32_t> held = clusters_per_component(topology, merged, merged_count);
       std::vector<uint32_t> composed = result.labels;
@@ -1889,7 +1973,8 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
         if (broken[c] > 0 && out.allocation.faces[c] <= kMaxFacesPerFaceStart) direct[f] = next_id++;
       }
       std::vector<uint32_t> start_counts = clusters_per_component(topology, direct, next_id);
-      direct = merge_down_with_flips(mesh, topology, data, check, corners, direct, next_id, targets, defects_of);
+      direct = merge_down_with_flips(mesh, topology, data, check, corners, boundary_loops, direct, next_id, targets,
+                                     defects_of);
       uint32_t merged_count = *std::max_element(direct.begin(), direct.end()) + 1;
       std::vector<uint32_t> held = clusters_per_component(topology, direct, merged_count);
       std::vector<uint32_t> composed = result.labels;

@@ -357,6 +357,36 @@ TEST_CASE("coarsen_mesh: a strip one triangle wide comes out a strip") {
   check_valid(both, run(both, 40), 40);
 }
 
+TEST_CASE("coarsen_mesh: a sphere with ten missing triangles keeps its ten holes") {
+  // A hole of three edges needs the three clusters of its three faces' neighbourhoods to the end:
+  // with two, the output closes over it (missing_boundary_edge). The merges back to n must not
+  // take a hole below three clusters (BoundaryLoops); before they checked it, 60, 100 and 150 left
+  // defects.
+  const Mesh sphere = test::icosphere(4);  // 5120 faces
+  Mesh m;
+  m.positions = sphere.positions;
+  std::vector<uint8_t> near_hole(sphere.vertex_count(), 0);  // holes share no vertex
+  uint32_t holes = 0;
+  for (size_t f = 0; f < sphere.face_count(); ++f) {
+    const uint32_t* t = &sphere.indices[3 * f];
+    if (holes < 10 && f % 512 >= 256 && !near_hole[t[0]] && !near_hole[t[1]] && !near_hole[t[2]] &&
+        f / 512 == holes) {
+      for (int k = 0; k < 3; ++k) near_hole[t[k]] = 1;
+      ++holes;
+      continue;
+    }
+    m.indices.insert(m.indices.end(), t, t + 3);
+  }
+  const Topology t = build_topology(m);
+  REQUIRE(t.boundary_loops == 10);
+  REQUIRE(t.nonmanifold_vertices == 0);
+  for (uint32_t n : {60u, 100u, 150u}) {
+    CAPTURE(n);
+    CoarsenMeshResult r = run(m, n);
+    check_valid(m, r, n);
+  }
+}
+
 TEST_CASE("coarsen_mesh: every component survives with at least its minimum") {
   Mesh disk = test::grid(12, 12, 0.8, 0.8, 0.05);
   Mesh m = test::combine(test::combine(test::icosphere(3), test::torus(40, 16, 1, 0.35), 3), disk, 6);
