@@ -132,6 +132,7 @@ void run_coarsen(const CoarsenArgs& a) {
   // (prepare_surface): the curvature behind the density needs consistent normals as much as the
   // dual does.
   SurfacePreparation prepared;
+  size_t prepared_faces = mesh.face_count();  // of the mesh prepare_surface changed (before or after subdividing)
   if (a.gradation > 0) {
     Topology input_topology = build_topology(mesh);
     prepared = prepare_surface(mesh, input_topology);
@@ -156,10 +157,9 @@ void run_coarsen(const CoarsenArgs& a) {
                       std::to_string(mesh.face_count()) + " faces of " + a.input +
                       ": ask for fewer, or add --subdivide auto to refine the input first");
   Topology topology = build_topology(mesh);
-  {
-    const SurfacePreparation more = prepare_surface(mesh, topology);  // nothing left after the first
-    prepared.split_vertices += more.split_vertices;
-    prepared.flipped_faces += more.flipped_faces;
+  if (a.gradation == 0) {
+    prepared = prepare_surface(mesh, topology);
+    prepared_faces = mesh.face_count();
   }
   if (prepared.split_vertices > 0 && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s: split %llu pinched vert%s (where parts of the surface touch at a point)\n",
@@ -167,7 +167,7 @@ void run_coarsen(const CoarsenArgs& a) {
                  prepared.split_vertices == 1 ? "ex" : "ices");
   if (prepared.flipped_faces > 0 && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s: flipped %llu of %zu faces so that each part is consistently oriented\n",
-                 a.input.c_str(), (unsigned long long)prepared.flipped_faces, input_faces);
+                 a.input.c_str(), (unsigned long long)prepared.flipped_faces, prepared_faces);
   // The whole job (coarsen_mesh.cpp): clusters per component, clustering, fixes until the dual is a
   // valid manifold, the dual.
   CoarsenMeshOptions job_options;

@@ -110,10 +110,11 @@ struct SurfacePreparation {
   uint64_t flipped_faces = 0;   ///< orient_consistently's flips
 };
 
-/// split_pinched_vertices, then orient_consistently: what `meshcvt coarsen` and `approximate` do to
-/// their input before clustering it, so that the coarse mesh of a surface that is a manifold but
-/// for pinched vertices and the orientation of its triangles comes out a valid manifold. Same
-/// inputs and outputs as those two.
+/// split_pinched_vertices, then orient_consistently: what coarsen_mesh (`meshcvt coarsen`) does to
+/// its input before clustering it, so that the coarse mesh of a surface that is a manifold but for
+/// pinched vertices and the orientation of its triangles comes out a valid manifold
+/// (approximate_shape only orients: its output's vertices are the input's). Same inputs and
+/// outputs as those two.
 SurfacePreparation prepare_surface(Mesh& mesh, Topology& topology);
 
 /// Summary printed by `meshcvt info`. Counts are those of Topology; lengths and areas are in the
