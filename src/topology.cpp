@@ -609,9 +609,10 @@ MeshInfo mesh_info(const Mesh& mesh, const Topology& t) {
   return info;
 }
 
-uint64_t orient_consistently(Mesh& mesh, Topology& topology) {
+std::vector<uint8_t> faces_to_orient(const Mesh& mesh, const Topology& topology) {
   assert(topology.face_adjacent.size() == mesh.indices.size());
-  if (topology.orientation_flips == 0) return 0;
+  std::vector<uint8_t> flip;
+  if (topology.orientation_flips == 0) return flip;
   const OrientationColours colours = colour_orientation(mesh, topology);
   // Which colour keeps its orientation, per component. A closed component's faces are made to face
   // outward: the colour under which its signed volume is positive (computed about a corner of its
@@ -640,13 +641,22 @@ uint64_t orient_consistently(Mesh& mesh, Topology& topology) {
   std::vector<uint8_t> keep(nc, 0);
   for (uint32_t c = 0; c < nc; ++c)
     keep[c] = !open[c] && volume[c] != 0 ? uint8_t(volume[c] < 0) : uint8_t(area[1][c] > area[0][c]);
-  uint64_t flipped = 0;
+  flip.assign(mesh.face_count(), 0);
   for (size_t f = 0; f < mesh.face_count(); ++f) {
     const uint32_t c = topology.face_component[f];
-    if (colours.conflict[c] || colours.flipped[f] == keep[c]) continue;
-    std::swap(mesh.indices[3 * f + 1], mesh.indices[3 * f + 2]);
-    ++flipped;
+    flip[f] = !colours.conflict[c] && colours.flipped[f] != keep[c];
   }
+  return flip;
+}
+
+uint64_t orient_consistently(Mesh& mesh, Topology& topology) {
+  const std::vector<uint8_t> flip = faces_to_orient(mesh, topology);
+  uint64_t flipped = 0;
+  for (size_t f = 0; f < flip.size(); ++f)
+    if (flip[f]) {
+      std::swap(mesh.indices[3 * f + 1], mesh.indices[3 * f + 2]);
+      ++flipped;
+    }
   if (flipped > 0) topology = build_topology(mesh);
   return flipped;
 }

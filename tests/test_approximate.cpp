@@ -216,7 +216,7 @@ TEST_CASE("approximate: subdivided cube, 6 proxies -> 8 corners, 6 quads, 12 tri
   CHECK(volume == doctest::Approx(8.0).epsilon(1e-6));
 }
 
-TEST_CASE("approximate: a cube whose faces are oriented at random is oriented first") {
+TEST_CASE("approximate, cluster (l21): a cube whose faces are oriented at random is oriented first") {
   // Every other triangle (by a fixed pseudo-random sequence) listed the other way round, as in
   // libcgal-demo's *-shuffled meshes: half the normals point inward, and without orienting the
   // mesh first the L2,1 partition splits the cube's sides.
@@ -237,6 +237,19 @@ TEST_CASE("approximate: a cube whose faces are oriented at random is oriented fi
   CHECK(s.mesh.indices == ref.mesh.indices);
   CHECK(s.mesh.positions == ref.mesh.positions);
   check_closed_manifold(s);
+
+  // cluster() with the L2,1 metric alone takes the normals as if the faces were oriented, and
+  // leaves the mesh as it is: the same labels and energies as on the consistent cube.
+  ClusterOptions co;
+  co.clusters = 6;
+  co.metric = Metric::l21;
+  co.device = "cpu";
+  const Mesh before = m;
+  const Clustering c = cluster(m, co), c_ref = cluster(original, co);
+  CHECK(m.indices == before.indices);
+  CHECK(c.labels == c_ref.labels);
+  REQUIRE(c.history.size() == c_ref.history.size());
+  for (size_t i = 0; i < c.history.size(); ++i) CHECK(c.history[i].energy == c_ref.history[i].energy);
 }
 
 TEST_CASE("approximate: chamfered box keeps its 10 sharp corners with 7 proxies") {

@@ -89,6 +89,11 @@ Topology build_topology(const Mesh& mesh);
 ///         allocated when topology.orientation_flips == 0.
 uint64_t orient_consistently(Mesh& mesh, Topology& topology);
 
+/// The faces orient_consistently would flip, without flipping them: flip[f] = 1 for each (empty
+/// when topology.orientation_flips == 0). For what needs consistent normals but not a changed mesh
+/// (the L2,1 metric of cluster()). Same inputs; O(F + V).
+std::vector<uint8_t> faces_to_orient(const Mesh& mesh, const Topology& topology);
+
 /// Gives each fan of faces around a pinched vertex its own copy of the vertex (same position), so
 /// that parts of the surface that touch at a point (two spheres sharing a vertex, a hole's rim
 /// touching another's, a scan's pinched fold) no longer do. A fan is a set of faces at the vertex
