@@ -222,11 +222,7 @@ TEST_CASE("approximate, cluster (l21): a cube whose faces are oriented at random
   // mesh first the L2,1 partition splits the cube's sides.
   const Mesh original = cube(4);
   Mesh m = original;
-  uint32_t seed = 5, flipped = 0;
-  for (size_t f = 0; f < m.face_count(); ++f) {
-    seed = seed * 1664525u + 1013904223u;
-    if (seed >> 31) std::swap(m.indices[3 * f + 1], m.indices[3 * f + 2]), ++flipped;
-  }
+  const size_t flipped = test::shuffle_orientation(m, 0, m.face_count(), 5);
   REQUIRE(flipped > 0);
   const ShapeApproximation ref = approximate_shape(original, with_proxies(6));
   const ShapeApproximation s = approximate_shape(m, with_proxies(6));

@@ -201,27 +201,14 @@ TEST_CASE("coarsen_mesh: a surface whose faces are oriented at random comes out 
   // sequence) listed the other way round.
   const Mesh original = test::icosphere(4);
   Mesh m = original;
-  uint32_t seed = 99, flipped = 0;
-  for (size_t f = 0; f < m.face_count(); ++f) {
-    seed = seed * 1664525u + 1013904223u;
-    if (seed >> 31) std::swap(m.indices[3 * f + 1], m.indices[3 * f + 2]), ++flipped;
-  }
+  const size_t flipped = test::shuffle_orientation(m, 0, m.face_count(), 99);
   REQUIRE(build_topology(m).orientation_flips > 0);
   for (uint32_t n : {12u, 100u}) {
     CAPTURE(n);
     CoarsenMeshResult r = run(m, n);
     CHECK(r.reoriented_faces == flipped);
     check_valid(original, r, n);
-    double volume = 0;  // six times the signed volume: positive when the triangles face outward
-    const Mesh& c = r.coarse.mesh;
-    for (size_t f = 0; f < c.face_count(); ++f) {
-      const float* p[3];
-      for (int k = 0; k < 3; ++k) p[k] = &c.positions[3 * size_t(c.indices[3 * f + k])];
-      volume += double(p[0][0]) * (double(p[1][1]) * p[2][2] - double(p[1][2]) * p[2][1]) -
-                double(p[0][1]) * (double(p[1][0]) * p[2][2] - double(p[1][2]) * p[2][0]) +
-                double(p[0][2]) * (double(p[1][0]) * p[2][1] - double(p[1][1]) * p[2][0]);
-    }
-    CHECK(volume > 0);
+    CHECK(test::signed_volume6(r.coarse.mesh) > 0);  // the triangles face outward
     // The same labels as the consistently oriented surface's: orientation plays no part in them.
     CHECK(r.clustering.labels == run(original, n).clustering.labels);
   }
@@ -337,7 +324,7 @@ TEST_CASE("coarsen_mesh: a strip one triangle wide comes out a strip") {
   // faces or more away from the ends meets the boundary on both sides, in two arcs, so the clusters
   // between the two ends must be single faces, and each end's cluster borders only the next one.
   // Before boundary corners counted as neighbours no fix could reach that, and every count left
-  // defects (3 of 3 vertices on no triangle).
+  // defects (at 3: three vertices and no triangle).
   Mesh strip;
   const uint32_t k = 17;
   for (uint32_t i = 0; i <= k; ++i) {

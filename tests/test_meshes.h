@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <map>
 #include <utility>
@@ -22,6 +23,34 @@ inline void add_triangle(Mesh& m, uint32_t a, uint32_t b, uint32_t c) {
   m.indices.push_back(a);
   m.indices.push_back(b);
   m.indices.push_back(c);
+}
+
+/// Flips about half of the faces of [begin, end) (swaps corners 1 and 2), chosen by a fixed
+/// pseudo-random sequence from `seed`, as in libcgal-demo's *-shuffled meshes. Returns how many.
+inline size_t shuffle_orientation(Mesh& m, size_t begin, size_t end, uint32_t seed) {
+  size_t flipped = 0;
+  for (size_t f = begin; f < end; ++f) {
+    seed = seed * 1664525u + 1013904223u;
+    if (seed >> 31) {
+      std::swap(m.indices[3 * f + 1], m.indices[3 * f + 2]);
+      ++flipped;
+    }
+  }
+  return flipped;
+}
+
+/// Six times the signed volume enclosed by a closed mesh (positive: its faces point outward).
+inline double signed_volume6(const Mesh& m) {
+  double v = 0;
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    const float* a = &m.positions[3 * size_t(m.indices[3 * f])];
+    const float* b = &m.positions[3 * size_t(m.indices[3 * f + 1])];
+    const float* c = &m.positions[3 * size_t(m.indices[3 * f + 2])];
+    v += double(a[0]) * (double(b[1]) * c[2] - double(b[2]) * c[1]) -
+         double(a[1]) * (double(b[0]) * c[2] - double(b[2]) * c[0]) +
+         double(a[2]) * (double(b[0]) * c[1] - double(b[1]) * c[0]);
+  }
+  return v;
 }
 
 /// Open grid of nx*ny quads (2 triangles each) over [0,sx]x[0,sy], height z = bump*sin(x)cos(y).

@@ -482,34 +482,10 @@ TEST_CASE("topology: large shuffled torus matches brute-force invariants on both
 
 namespace {
 
-// Six times the signed volume enclosed by a closed mesh (positive: faces point outward).
-double signed_volume6(const Mesh& m) {
-  double v = 0;
-  for (size_t f = 0; f < m.face_count(); ++f) {
-    const float* a = &m.positions[3 * size_t(m.indices[3 * f])];
-    const float* b = &m.positions[3 * size_t(m.indices[3 * f + 1])];
-    const float* c = &m.positions[3 * size_t(m.indices[3 * f + 2])];
-    v += double(a[0]) * (double(b[1]) * c[2] - double(b[2]) * c[1]) -
-         double(a[1]) * (double(b[0]) * c[2] - double(b[2]) * c[0]) +
-         double(a[2]) * (double(b[0]) * c[1] - double(b[1]) * c[0]);
-  }
-  return v;
-}
-
 void flip_face(Mesh& m, size_t f) { std::swap(m.indices[3 * f + 1], m.indices[3 * f + 2]); }
 
-// Flips about half of the faces of [begin, end), chosen by a fixed pseudo-random sequence.
-size_t shuffle_orientation(Mesh& m, size_t begin, size_t end, uint32_t seed) {
-  size_t flipped = 0;
-  for (size_t f = begin; f < end; ++f) {
-    seed = seed * 1664525u + 1013904223u;
-    if (seed >> 31) {
-      flip_face(m, f);
-      ++flipped;
-    }
-  }
-  return flipped;
-}
+using meshcvt::test::shuffle_orientation;
+using meshcvt::test::signed_volume6;
 
 }  // namespace
 
