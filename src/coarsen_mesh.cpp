@@ -520,13 +520,19 @@ class CornerPolygons {
       : mesh_(mesh), topology_(topology), vertex_stamp_(mesh.vertex_count(), 0) {}
 
   // The polygon at vertex v with label(f) the cluster of face f: true, and polygon() its clusters
-  // in fan order (an open fan from one boundary edge to the other), when 4 to kMaxPolygon clusters
-  // meet at v in one manifold fan, each once. False elsewhere: inside a cluster, a corner of
-  // three (a triangle, nothing to choose), or a cluster twice around v (pinched: RegionCheck's).
+  // in fan order (an open fan from one boundary edge to the other: open()), when 4 to kMaxPolygon
+  // clusters meet at v in one manifold fan, each once, or 3 in an open fan. False elsewhere:
+  // inside a cluster, an inner corner of three (a triangle, nothing to choose), or a cluster twice
+  // around v (pinched: RegionCheck's). An open polygon's first and last clusters are closed by the
+  // boundary: the dual's edge between them must be a boundary edge, the side of this polygon's
+  // triangles alone, so they must not share a border (or another corner's triangle) elsewhere;
+  // with three clusters that is all there is to check. (Before open fans were checked, merges
+  // back to n made the two ends of a hole's corner neighbours: their edge got a triangle besides
+  // the boundary's, seen on an irregular sphere with 40 missing triangles, tests/.)
   template <class Label>
   bool at(uint32_t v, Label label) {
     const uint32_t begin = topology_.vertex_face_offsets[v], end = topology_.vertex_face_offsets[v + 1];
-    if (end - begin < 4) return false;
+    if (end - begin < 3) return false;
     const uint32_t first = topology_.vertex_faces[begin];
     uint32_t distinct = 0, seen[3];
     for (uint32_t i = begin; i < end && distinct < 3; ++i) {
@@ -577,18 +583,22 @@ class CornerPolygons {
     for (uint32_t h : fan_)
       if (runs_.empty() || runs_.back() != label(h)) runs_.push_back(label(h));
     if (closed && runs_.size() > 1 && runs_.front() == runs_.back()) runs_.pop_back();
-    if (runs_.size() < 4 || runs_.size() > kMaxPolygon) return false;
+    open_ = !closed;
+    if (runs_.size() < (closed ? 4u : 3u) || runs_.size() > kMaxPolygon) return false;
     sorted_ = runs_;
     std::sort(sorted_.begin(), sorted_.end());
     return std::adjacent_find(sorted_.begin(), sorted_.end()) == sorted_.end();
   }
   const std::vector<uint32_t>& polygon() const { return runs_; }
+  bool open() const { return open_; }
 
   // Whether `polygon` (as at() gives it) has a triangulation none of whose diagonals (x, y) is
-  // taken(x, y). Interval dynamic programming: can[i][j], the part i..j closed by the chord (i, j)
-  // splits into triangles with free diagonals. O(k^3) for k clusters.
-  template <class Taken>
-  bool triangulable(const uint32_t* polygon, size_t k, Taken taken) {
+  // taken(x, y), and, when `open`, whose closing side (first, last) is free: !joined(first, last).
+  // Interval dynamic programming: can[i][j], the part i..j closed by the chord (i, j) splits into
+  // triangles with free diagonals. O(k^3) for k clusters.
+  template <class Taken, class Joined>
+  bool triangulable(const uint32_t* polygon, size_t k, Taken taken, bool open, Joined joined) {
+    if (open && joined(polygon[0], polygon[k - 1])) return false;
     can_.assign(k * k, 0);
     for (size_t i = 0; i + 1 < k; ++i) can_[i * k + i + 1] = 1;
     for (size_t length = 2; length < k; ++length)
@@ -602,11 +612,11 @@ class CornerPolygons {
   }
 
   // Whether every polygon at a vertex of `faces` is triangulable (clusters by label, diagonals
-  // refused by taken).
-  template <class Label, class Taken>
-  bool all_triangulable(const std::vector<uint32_t>& faces, Label label, Taken taken) {
+  // and closing sides refused by adjacent(x, y): the two share a border).
+  template <class Label, class Adjacent>
+  bool all_triangulable(const std::vector<uint32_t>& faces, Label label, Adjacent adjacent) {
     for (uint32_t v : vertices_of(faces))
-      if (at(v, label) && !triangulable(runs_.data(), runs_.size(), taken)) return false;
+      if (at(v, label) && !triangulable(runs_.data(), runs_.size(), adjacent, open_, adjacent)) return false;
     return true;
   }
 
@@ -630,29 +640,37 @@ class CornerPolygons {
   const Topology& topology_;
   std::vector<uint32_t> vertex_stamp_, vertices_, fan_, runs_, sorted_;
   uint32_t stamp_ = 0;
+  bool open_ = false;  // of the last polygon at() found
   std::vector<uint8_t> can_;
 };
 
 // How many corner polygons have each pair of clusters as a possible diagonal (the two not
-// consecutive around the corner). coarsen_clustering triangulates the polygons one after the
-// other, each taking its best free diagonals, so a polygon can count only on a diagonal that no
-// other polygon may take: two corners facing the same pair across them (both of whose other
-// diagonals are edges) would both take it. Polygons are added and removed as flat lists.
+// consecutive around the corner), and how many open polygons as their closing side (a boundary
+// step: the dual's edge there, which coarsen_clustering's triangulation avoids as a diagonal
+// elsewhere, as it avoids the edges of shared borders). coarsen_clustering triangulates the
+// polygons one after the other, each taking its best free diagonals, so a polygon can count only
+// on a diagonal that no other polygon may take: two corners facing the same pair across them
+// (both of whose other diagonals are edges) would both take it. Polygons are added and removed as
+// flat lists.
 class DiagonalLedger {
  public:
-  void add(const uint32_t* polygon, size_t k, int sign) {
+  void add(const uint32_t* polygon, size_t k, int sign, bool open) {
     for (size_t i = 0; i < k; ++i)
       for (size_t j = i + 2; j < k; ++j)
         if (i > 0 || j + 1 < k) count_[key(polygon[i], polygon[j])] += uint32_t(sign);
+    if (open) steps_[key(polygon[0], polygon[k - 1])] += uint32_t(sign);
   }
-  uint32_t count(uint32_t x, uint32_t y) const {
-    auto it = count_.find(key(x, y));
-    return it == count_.end() ? 0 : it->second;
-  }
+  uint32_t count(uint32_t x, uint32_t y) const { return find(count_, x, y); }
+  uint32_t steps(uint32_t x, uint32_t y) const { return find(steps_, x, y); }
 
  private:
   static uint64_t key(uint32_t x, uint32_t y) { return x < y ? uint64_t(x) << 32 | y : uint64_t(y) << 32 | x; }
-  std::unordered_map<uint64_t, uint32_t> count_;  // lookups only: the order of the map never matters
+  static uint32_t find(const std::unordered_map<uint64_t, uint32_t>& map, uint32_t x, uint32_t y) {
+    auto it = map.find(key(x, y));
+    return it == map.end() ? 0 : it->second;
+  }
+  // lookups only: the order of the maps never matters
+  std::unordered_map<uint64_t, uint32_t> count_, steps_;
 };
 
 // Ways to cut one cluster into 2 or 3 pieces, scored by RegionCheck.
@@ -1181,7 +1199,8 @@ void replace_component(const Topology& topology, std::vector<uint32_t>& base, co
 // holds its target count, taking only merges that keep the dual valid: the merged cluster is fit
 // (RegionCheck: a disk, one border with each neighbour, enough neighbours), the clusters next to
 // both keep three neighbours or more, and every corner polygon around the merged cluster keeps a
-// triangulation whose diagonals are neither edges nor possible diagonals of another corner
+// triangulation whose diagonals are neither edges nor possible diagonals of another corner, and,
+// at the boundary, two end clusters that share no border (their edge is the boundary's there)
 // (CornerPolygons, DiagonalLedger), and no boundary loop is left to fewer than three clusters
 // (BoundaryLoops). In the dual that is an edge contraction meeting the link condition, so the dual
 // stays a manifold of the same topology. Returns the merges made; the
@@ -1237,8 +1256,9 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
   DiagonalLedger ledger;
   auto current = [&](uint32_t f) { return labels[f]; };
   for (uint32_t v = 0; v + 1 < topology.vertex_face_offsets.size(); ++v)
-    if (corners.at(v, current)) ledger.add(corners.polygon().data(), corners.polygon().size(), +1);
+    if (corners.at(v, current)) ledger.add(corners.polygon().data(), corners.polygon().size(), +1, corners.open());
   std::vector<uint32_t> old_polygons, new_polygons, old_offsets, new_offsets;
+  std::vector<uint8_t> old_open, new_open;
   auto fit = [&](uint32_t a, uint32_t b) {
     shared_loops.clear();
     std::set_intersection(loops[a].begin(), loops[a].end(), loops[b].begin(), loops[b].end(),
@@ -1259,38 +1279,48 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
     // polygon's possible diagonals.
     auto before = [&](uint32_t f) { return labels[f]; };
     auto after = [&](uint32_t f) { return labels[f] == b ? a : labels[f]; };
-    old_polygons.clear(), new_polygons.clear();
+    old_polygons.clear(), new_polygons.clear(), old_open.clear(), new_open.clear();
     old_offsets.assign(1, 0), new_offsets.assign(1, 0);
     for (uint32_t v : corners.vertices_of(faces)) {
       if (corners.at(v, before)) {
         old_polygons.insert(old_polygons.end(), corners.polygon().begin(), corners.polygon().end());
         old_offsets.push_back(uint32_t(old_polygons.size()));
+        old_open.push_back(corners.open());
       }
       if (corners.at(v, after)) {
         new_polygons.insert(new_polygons.end(), corners.polygon().begin(), corners.polygon().end());
         new_offsets.push_back(uint32_t(new_polygons.size()));
+        new_open.push_back(corners.open());
       }
     }
     auto swap_in = [&](const std::vector<uint32_t>& out, const std::vector<uint32_t>& out_offsets,
-                       const std::vector<uint32_t>& in, const std::vector<uint32_t>& in_offsets) {
+                       const std::vector<uint8_t>& out_open, const std::vector<uint32_t>& in,
+                       const std::vector<uint32_t>& in_offsets, const std::vector<uint8_t>& in_open) {
       for (size_t i = 0; i + 1 < out_offsets.size(); ++i)
-        ledger.add(&out[out_offsets[i]], out_offsets[i + 1] - out_offsets[i], -1);
+        ledger.add(&out[out_offsets[i]], out_offsets[i + 1] - out_offsets[i], -1, out_open[i]);
       for (size_t i = 0; i + 1 < in_offsets.size(); ++i)
-        ledger.add(&in[in_offsets[i]], in_offsets[i + 1] - in_offsets[i], +1);
+        ledger.add(&in[in_offsets[i]], in_offsets[i + 1] - in_offsets[i], +1, in_open[i]);
     };
-    swap_in(old_polygons, old_offsets, new_polygons, new_offsets);
+    swap_in(old_polygons, old_offsets, old_open, new_polygons, new_offsets, new_open);
     auto contains = [](const std::vector<uint32_t>& list, uint32_t x) {
       return std::binary_search(list.begin(), list.end(), x);
     };
-    auto taken = [&](uint32_t x, uint32_t y) {
-      if (ledger.count(x, y) > 1) return true;  // this polygon's own candidacy is one
+    auto adjacent = [&](uint32_t x, uint32_t y) {
       if (y == a) std::swap(x, y);
       if (x == a) return contains(neighbours[a], y) || contains(neighbours[b], y);
       return contains(neighbours[x], y);
     };
+    auto taken = [&](uint32_t x, uint32_t y) {
+      // this polygon's own candidacy is one; a boundary step is an edge of the dual
+      return ledger.count(x, y) > 1 || ledger.steps(x, y) > 0 || adjacent(x, y);
+    };
+    auto joined = [&](uint32_t x, uint32_t y) {  // a closing side: the boundary step (x, y) is its own
+      return ledger.steps(x, y) > 1 || adjacent(x, y);
+    };
     for (size_t i = 0; i + 1 < new_offsets.size(); ++i)
-      if (!corners.triangulable(&new_polygons[new_offsets[i]], new_offsets[i + 1] - new_offsets[i], taken)) {
-        swap_in(new_polygons, new_offsets, old_polygons, old_offsets);
+      if (!corners.triangulable(&new_polygons[new_offsets[i]], new_offsets[i + 1] - new_offsets[i], taken, new_open[i],
+                                joined)) {
+        swap_in(new_polygons, new_offsets, new_open, old_polygons, old_offsets, old_open);
         return false;
       }
     return true;  // the merge follows: the ledger already holds its polygons
