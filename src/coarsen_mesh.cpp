@@ -525,8 +525,8 @@ class CornerPolygons {
   // inside a cluster, an inner corner of three (a triangle, nothing to choose), or a cluster twice
   // around v (pinched: RegionCheck's). An open polygon's first and last clusters are closed by the
   // boundary: the dual's edge between them must be a boundary edge, the side of this polygon's
-  // triangles alone, so they must not share a border (or another corner's triangle) elsewhere;
-  // with three clusters that is all there is to check. (Before open fans were checked, merges
+  // triangles alone, so they must not share a border nor close another open fan; with three
+  // clusters that is all there is to check. (Before open fans were checked, merges
   // back to n made the two ends of a hole's corner neighbours: their edge got a triangle besides
   // the boundary's, seen on an irregular sphere with 40 missing triangles, tests/.)
   template <class Label>
