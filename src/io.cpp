@@ -495,6 +495,8 @@ Mesh read_mesh(const std::string& path, const ReadOptions& options, ReadStats* s
     local.file_vertices = result.file_vertices;
     local.file_polygons = result.mesh.polygons;
     local.triangulated_polygons = result.mesh.triangulated;
+    local.skipped_header_lines = result.skipped_header_lines;
+    local.first_skipped_header_line = result.first_skipped_header_line;
     Mesh mesh = io::finish_mesh(std::move(result.mesh), options.weld, local);
     if (stats) *stats = std::move(local);
     return mesh;

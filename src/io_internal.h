@@ -97,6 +97,7 @@ struct ReadResult {
   RawMesh mesh;
   std::string format;          // ReadStats::format
   uint64_t file_vertices = 0;  // vertices stored in the file
+  uint64_t skipped_header_lines = 0, first_skipped_header_line = 0;  // ReadStats'
 };
 
 // The readers (io_obj.cpp, io_off.cpp, io_ply.cpp, io_stl.cpp). They throw FileError naming

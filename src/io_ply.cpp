@@ -113,6 +113,8 @@ class PlyReader {
                     : header_.format == Format::binary_le ? "ply-binary-le"
                                                           : "ply-binary-be";
     result.file_vertices = vertex_count_;
+    result.skipped_header_lines = skipped_header_lines_;
+    result.first_skipped_header_line = first_skipped_header_line_;
     return result;
   }
 
@@ -188,6 +190,11 @@ class PlyReader {
         header_.data_offset = static_cast<size_t>(c.p - file_.begin());
         header_.data_line = c.line;
         return;
+      } else if (header_.elements.empty()) {
+        // Not a keyword, before any element: a line some exporters write without `comment`
+        // (Blender 2.4x: "Created by Blender3D 247 - www.blender.org, ..."). Skipped and counted;
+        // after an element it could be a misspelt property, and stays an error.
+        if (skipped_header_lines_++ == 0) first_skipped_header_line_ = line;
       } else {
         fail_line(line, "unknown header keyword " + quote(keyword));
       }
@@ -559,6 +566,7 @@ class PlyReader {
   bool swap_ = false;
   size_t pos_ = 0;
   uint64_t vertex_count_ = 0;
+  uint64_t skipped_header_lines_ = 0, first_skipped_header_line_ = 0;
   RawMesh mesh_;
 };
 

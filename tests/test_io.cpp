@@ -582,6 +582,25 @@ TEST_CASE("io: PLY malformed input names the header line, data line or byte") {
     read_error(dir.write("a.ply", "ply\nformat ascii 1.0\nelement vertex 0\n"), line, 3);
   }
   SUBCASE("header: not a PLY file") { read_error(dir.write("a.ply", "OFF\n"), line, 1); }
+  SUBCASE("header: a line without a keyword before the first element is skipped and counted") {
+    // Blender 2.4x wrote its banner without `comment` (assimp-testmodels' PLY/Wuson.ply).
+    std::string head = ascii_head;
+    head.insert(head.find("element vertex"), "Created by Blender3D 247 - www.blender.org, source file: \nmade 2008\n");
+    meshcvt::ReadStats stats;
+    const Mesh mesh = meshcvt::read_mesh(dir.write("a.ply", head + tri + "3 0 1 2\n"), {}, &stats);
+    CHECK(mesh.face_count() == 1);
+    CHECK(stats.skipped_header_lines == 2);
+    CHECK(stats.first_skipped_header_line == 3);
+    meshcvt::ReadStats plain;
+    meshcvt::read_mesh(dir.write("b.ply", ascii_head + tri + "3 0 1 2\n"), {}, &plain);
+    CHECK(plain.skipped_header_lines == 0);
+  }
+  SUBCASE("header: an unknown keyword after an element is an error") {
+    std::string bad = ascii_head;
+    bad.replace(bad.find("property float y"), 16, "propery float y");  // line 5
+    const FileError e = read_error(dir.write("a.ply", bad + tri + "3 0 1 2\n"), line, 5);
+    CHECK(contains(e.reason(), "propery"));
+  }
   SUBCASE("header: missing y") {
     std::string bad = ascii_head;
     bad.replace(bad.find("property float y\n"), 17, "");

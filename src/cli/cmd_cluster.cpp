@@ -78,7 +78,7 @@ void run_cluster(const ClusterArgs& a) {
     options.progress = print_progress;
 
   // Large meshes are clustered in an order with locality (mesh_order.h); outputs use the input's.
-  InputMesh input = read_input(a.input, !a.no_weld);
+  InputMesh input = read_input(a.input, !a.no_weld, a.quiet);
   Mesh& mesh = input.mesh;
   const LocalityOrder& order = input.order;
   Clustering c;

@@ -116,7 +116,7 @@ void run_coarsen(const CoarsenArgs& a) {
   auto t0 = Clock::now();
   ReadOptions ro;
   ro.weld = !a.no_weld;
-  Mesh mesh = read_mesh(a.input, ro);
+  Mesh mesh = read_mesh_noted(a.input, ro, a.quiet);
   double read_s = seconds(t0);
   // --subdivide, --gradation (as ACVD): the density is estimated on the input's own faces (a
   // midpoint subdivision adds no curvature information, and its finer faces would make creases look

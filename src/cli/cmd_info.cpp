@@ -72,6 +72,7 @@ void print_text(const InfoArgs& a, const ReadStats& rs, const MeshInfo& i, doubl
   row("triangulated polygons", rs.triangulated_polygons);
   row("welded vertices", a.no_weld ? std::string("0 (--no-weld)") : std::to_string(rs.welded_vertices));
   row("unreferenced dropped", rs.unreferenced_vertices);
+  row("skipped header lines", rs.skipped_header_lines);
   row("read ms", milliseconds(read_ms));
   row("topology ms", milliseconds(topology_ms));
   row("summary ms", milliseconds(info_ms));
@@ -100,6 +101,7 @@ void print_json(const InfoArgs& a, const ReadStats& rs, const MeshInfo& i, doubl
       .value("file_polygons", rs.file_polygons)
       .value("triangulated_polygons", rs.triangulated_polygons)
       .value("welded_vertices", rs.welded_vertices)
+      .value("skipped_header_lines", rs.skipped_header_lines)
       .value("unreferenced_vertices", rs.unreferenced_vertices)
       .end_object();
   j.begin_object("timings_ms").value("read", read_ms).value("topology", topology_ms).value("summary", info_ms).end_object();
@@ -114,7 +116,7 @@ void run_info(const InfoArgs& a) {
   ro.weld = !a.no_weld;
   ReadStats rs;
   auto t0 = Clock::now();
-  Mesh mesh = read_mesh(a.input, ro, &rs);
+  Mesh mesh = read_mesh_noted(a.input, ro, false, &rs);
   double read_ms = ms_since(t0);
   t0 = Clock::now();
   Topology topology = build_topology(mesh);

@@ -42,10 +42,10 @@ void run_stats(const StatsArgs& a) {
   using Clock = std::chrono::steady_clock;
   ReadOptions ro;
   ro.weld = !a.no_weld;
-  Mesh mesh = read_mesh(a.input, ro);
+  Mesh mesh = read_mesh_noted(a.input, ro, false);
   // Read the reference before any measuring, so a bad --ref fails fast.
   Mesh ref;
-  if (!a.ref.empty()) ref = read_mesh(a.ref, ro);
+  if (!a.ref.empty()) ref = read_mesh_noted(a.ref, ro, false);
 
   TriangleQuality q = triangle_quality(mesh);
   ApproximationError e;

@@ -24,7 +24,7 @@ void run_subdivide(const SubdivideArgs& a) {
   ReadOptions ro;
   ro.weld = !a.no_weld;
   auto t0 = Clock::now();
-  Mesh mesh = read_mesh(a.input, ro);
+  Mesh mesh = read_mesh_noted(a.input, ro, a.quiet);
   double read_s = seconds_since(t0);
   t0 = Clock::now();
   Mesh fine = subdivide_midpoint(mesh, a.levels);

@@ -31,15 +31,20 @@ void print_progress(const ClusterProgress& progress);
 /// stays that of the largest phase. Call before reading the input. read_input() calls it.
 void prepare_allocator(const std::string& input_path);
 
-/// The input of a partitioning command: read (weld: merge duplicate vertices), then, when large,
-/// reordered for locality (reorder_for_locality); `order` restores the input's order for outputs.
+/// read_mesh, plus a note on stderr (unless quiet) about what the reader skipped: PLY header lines
+/// that are no keyword. `stats` may be null.
+Mesh read_mesh_noted(const std::string& path, const ReadOptions& options, bool quiet, ReadStats* stats = nullptr);
+
+/// The input of a partitioning command: read (weld: merge duplicate vertices; read_mesh_noted),
+/// then, when large, reordered for locality (reorder_for_locality); `order` restores the input's
+/// order for outputs.
 struct InputMesh {
   Mesh mesh;
   LocalityOrder order;
   ReadStats stats;
   double seconds = 0;  ///< reading and reordering
 };
-InputMesh read_input(const std::string& path, bool weld);
+InputMesh read_input(const std::string& path, bool weld, bool quiet);
 
 /// Appends the --device option (auto|cpu|gpu|gpu:N) to a subcommand.
 void add_device_option(CLI::App* sub, std::string& device);

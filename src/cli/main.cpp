@@ -53,13 +53,25 @@ void prepare_allocator(const std::string& input_path) {
 #endif
 }
 
-InputMesh read_input(const std::string& path, bool weld) {
+Mesh read_mesh_noted(const std::string& path, const ReadOptions& options, bool quiet, ReadStats* stats) {
+  ReadStats local;
+  Mesh mesh = read_mesh(path, options, &local);
+  if (local.skipped_header_lines > 0 && !quiet)
+    std::fprintf(stderr, "meshcvt: note: %s: skipped %llu PLY header line%s that begin%s with no PLY keyword (line %llu%s)\n",
+                 path.c_str(), (unsigned long long)local.skipped_header_lines, local.skipped_header_lines > 1 ? "s" : "",
+                 local.skipped_header_lines > 1 ? "" : "s", (unsigned long long)local.first_skipped_header_line,
+                 local.skipped_header_lines > 1 ? " first" : "");
+  if (stats) *stats = std::move(local);
+  return mesh;
+}
+
+InputMesh read_input(const std::string& path, bool weld, bool quiet) {
   prepare_allocator(path);
   auto t0 = std::chrono::steady_clock::now();
   InputMesh in;
   ReadOptions ro;
   ro.weld = weld;
-  in.mesh = read_mesh(path, ro, &in.stats);
+  in.mesh = read_mesh_noted(path, ro, quiet, &in.stats);
   in.order = reorder_for_locality(in.mesh);
   in.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return in;

@@ -24,6 +24,10 @@ struct ReadStats {
   uint64_t triangulated_polygons = 0;  ///< polygons with more than 3 corners that were split
   uint64_t welded_vertices = 0;        ///< vertices merged into an earlier one with the same position
   uint64_t unreferenced_vertices = 0;  ///< vertices no face uses, dropped
+  /// PLY: header lines before the first `element` that start with no PLY keyword (Blender 2.4x
+  /// wrote "Created by Blender3D ..." there), skipped; the first one's line number (1-based).
+  uint64_t skipped_header_lines = 0;
+  uint64_t first_skipped_header_line = 0;
   // file_vertices == mesh.vertex_count() + welded_vertices + unreferenced_vertices.
   // file_polygons counts faces (STL: facets); the mesh has file_polygons triangles plus one more
   // per extra corner of each triangulated polygon.
@@ -36,7 +40,9 @@ struct ReadStats {
 /// unreferenced vertices are dropped. Positions are converted to float (PLY doubles are rounded).
 /// OBJ: v/f statements only (v, v/vt, v/vt/vn, v//vn corners, negative = relative indices);
 /// OFF: [ST][C][N][n]OFF, data line based; PLY: ascii and binary of either byte order, a `face`
-/// element with a `vertex_indices` or `vertex_index` list; STL: ascii and binary (told apart by size).
+/// element with a `vertex_indices` or `vertex_index` list (a header line before the first element
+/// that is no PLY keyword is skipped and counted in ReadStats, an unknown keyword after it is an
+/// error); STL: ascii and binary (told apart by size).
 /// Throws FileError (file name + line or byte offset + reason) for anything malformed: missing or
 /// empty file, truncated data, counts that disagree with the data, indices out of range, NaN/Inf
 /// coordinates, non-numeric tokens, faces with fewer than 3 corners, unsupported layouts, and a

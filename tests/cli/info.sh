@@ -130,6 +130,15 @@ check split-no-weld "$tmp/json" "$tmp/split.off" \
   'd["components"] == 2 and d["read"]["welded_vertices"] == 0 and d["read"]["weld"] is False' ||
   fail "split --no-weld"
 
+# ---- a PLY whose header has a line without a keyword before its elements (as Blender 2.4x wrote
+# them): read, with a note naming the file and the line, and the count in the report
+printf 'ply\nformat ascii 1.0\nCreated by Blender3D 247 - www.blender.org, source file: \nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n' >"$tmp/banner.ply"
+"$cli" info "$tmp/banner.ply" --json >"$tmp/json" 2>"$tmp/err" || fail "info on a PLY with a banner line failed: $(cat "$tmp/err")"
+grep -q "^meshcvt: note: $tmp/banner.ply: skipped 1 PLY header line .*(line 3)\$" "$tmp/err" || fail "banner: no note: $(cat "$tmp/err")"
+check banner "$tmp/json" - 'd["faces"] == 1 and d["read"]["skipped_header_lines"] == 1' || fail "banner: count"
+"$cli" subdivide "$tmp/banner.ply" -k 1 -o "$tmp/banner-fine.off" -q >/dev/null 2>"$tmp/err" || fail "subdivide banner failed"
+[ ! -s "$tmp/err" ] || fail "subdivide -q printed the note: $(cat "$tmp/err")"
+
 # ---- subdivide: faces x 4^k, same chi, still closed; a small mesh checked independently
 "$cli" subdivide "$tmp/bowtie.off" -k 2 -o "$tmp/fine.off" >"$tmp/out" || fail "subdivide bowtie failed"
 grep -q "$tmp/fine.off" "$tmp/out" || fail "subdivide does not say what it wrote"
