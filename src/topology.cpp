@@ -742,6 +742,35 @@ uint64_t split_pinched_vertices(Mesh& mesh, Topology& topology) {
   return fans.size();
 }
 
+uint64_t remove_collapsed_faces(Mesh& mesh, std::vector<uint32_t>* kept_index) {
+  const size_t faces = mesh.face_count();
+  assert(mesh.source_polygon.empty() || mesh.source_polygon.size() == faces);
+  auto collapsed = [&](size_t f) {
+    const uint32_t* t = &mesh.indices[3 * f];
+    return t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
+  };
+  if (kept_index) kept_index->assign(faces, kNone);
+  size_t removed = 0;
+  for (size_t f = 0; f < faces; ++f) removed += collapsed(f);
+  if (removed > 0 && mesh.source_polygon.empty()) {  // identity: made explicit before faces move
+    mesh.source_polygon.resize(faces);
+    for (size_t f = 0; f < faces; ++f) mesh.source_polygon[f] = uint32_t(f);
+  }
+  size_t kept = 0;
+  for (size_t f = 0; f < faces; ++f) {
+    if (removed > 0 && collapsed(f)) continue;
+    if (kept_index) (*kept_index)[f] = uint32_t(kept);
+    if (kept != f) {
+      for (int k = 0; k < 3; ++k) mesh.indices[3 * kept + k] = mesh.indices[3 * f + k];
+      mesh.source_polygon[kept] = mesh.source_polygon[f];
+    }
+    ++kept;
+  }
+  mesh.indices.resize(3 * kept);
+  if (removed > 0) mesh.source_polygon.resize(kept);
+  return removed;
+}
+
 SurfacePreparation prepare_surface(Mesh& mesh, Topology& topology) {
   SurfacePreparation p;
   p.split_vertices = split_pinched_vertices(mesh, topology);

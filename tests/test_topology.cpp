@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <set>
@@ -577,6 +578,51 @@ TEST_CASE("orient_consistently: a Moebius strip is left as it is, the other part
   Topology ta = meshcvt::build_topology(alone);
   CHECK(meshcvt::orient_consistently(alone, ta) == 0);
   CHECK(alone.indices == strip.indices);
+}
+
+// ---- remove_collapsed_faces
+
+TEST_CASE("remove_collapsed_faces: faces with a repeated corner go, the others keep their order and source") {
+  Mesh m = meshcvt::test::icosphere(1);  // 80 faces
+  const Mesh original = m;
+  // Collapsed faces after faces 0, 10 and at the end: (a, a, b), (a, b, b), (c, c, c).
+  const std::vector<std::array<uint32_t, 3>> extra = {{0, 0, 1}, {2, 3, 3}, {5, 5, 5}};
+  Mesh with;
+  with.positions = m.positions;
+  std::vector<uint32_t> expected_index;  // per face of `with`
+  for (uint32_t f = 0; f < 80; ++f) {
+    with.indices.insert(with.indices.end(), &m.indices[3 * f], &m.indices[3 * f] + 3);
+    expected_index.push_back(f);
+    if (f == 0 || f == 10 || f == 79) {
+      const auto& e = extra[f == 0 ? 0 : f == 10 ? 1 : 2];
+      with.indices.insert(with.indices.end(), e.begin(), e.end());
+      expected_index.push_back(meshcvt::kNone);
+    }
+  }
+  std::vector<uint32_t> kept;
+  Mesh cleaned = with;
+  CHECK(meshcvt::remove_collapsed_faces(cleaned, &kept) == 3);
+  CHECK(cleaned.indices == original.indices);
+  CHECK(kept == expected_index);
+  // source_polygon made explicit: the faces' indices in `with`
+  REQUIRE(cleaned.source_polygon.size() == 80);
+  for (uint32_t f = 0; f < 83; ++f)
+    if (kept[f] != meshcvt::kNone) CHECK(cleaned.source_polygon[kept[f]] == f);
+  CHECK(meshcvt::build_topology(cleaned).component_count == 1);
+  CHECK(meshcvt::build_topology(with).component_count == 4);  // each collapsed face a component
+  // A given source_polygon follows the faces; nothing to remove changes nothing.
+  Mesh sourced = with;
+  sourced.source_polygon.assign(83, 0);
+  for (uint32_t f = 0; f < 83; ++f) sourced.source_polygon[f] = 1000 + f;
+  meshcvt::remove_collapsed_faces(sourced);
+  for (uint32_t f = 0; f < 83; ++f)
+    if (kept[f] != meshcvt::kNone) CHECK(sourced.source_polygon[kept[f]] == 1000 + f);
+  Mesh plain = original;
+  CHECK(meshcvt::remove_collapsed_faces(plain, &kept) == 0);
+  CHECK(plain.indices == original.indices);
+  CHECK(plain.source_polygon.empty());
+  CHECK(kept.size() == 80);
+  CHECK(kept[79] == 79);
 }
 
 // ---- split_pinched_vertices

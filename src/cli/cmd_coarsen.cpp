@@ -118,6 +118,15 @@ void run_coarsen(const CoarsenArgs& a) {
   ro.weld = !a.no_weld;
   Mesh mesh = read_mesh_noted(a.input, ro, a.quiet);
   double read_s = seconds(t0);
+  // Faces with a repeated corner (welding a sliver leaves them) have no area and no edges: left
+  // out here as coarsen_mesh would leave them out, so that the faces and chi printed are those of
+  // the surface coarsened.
+  const uint64_t collapsed = remove_collapsed_faces(mesh);
+  if (mesh.face_count() == 0)
+    throw FileError(a.input, "every face has a repeated corner index (no area): nothing to coarsen");
+  if (collapsed > 0 && !a.quiet)
+    std::fprintf(stderr, "meshcvt: note: %s: left out %llu face%s with a repeated corner (no area)\n", a.input.c_str(),
+                 (unsigned long long)collapsed, collapsed == 1 ? "" : "s");
   // --subdivide, --gradation (as ACVD): the density is estimated on the input's own faces (a
   // midpoint subdivision adds no curvature information, and its finer faces would make creases look
   // sharper) and each subdivided face inherits its parent's: children of f are [f 4^k, (f+1) 4^k).
@@ -200,6 +209,7 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("iterations", c.iterations).value("converged", c.converged);
     j.value("input_faces", uint64_t(input_faces)).value("split_vertices", prepared.split_vertices + job.split_vertices)
         .value("reoriented_faces", prepared.flipped_faces + job.reoriented_faces)
+        .value("collapsed_faces", collapsed + job.collapsed_faces)
         .value("subdivision_levels", subdivision_levels)
         .value("gradation", a.gradation);
     j.begin_object("output").value("vertices", uint64_t(r.mesh.vertex_count())).value("faces", uint64_t(r.mesh.face_count()))

@@ -369,6 +369,10 @@ struct CoarsenMeshResult {
   /// consistently oriented (orient_consistently); the coarse mesh follows the flipped faces.
   uint64_t split_vertices = 0;
   uint64_t reoriented_faces = 0;
+  /// Faces with a repeated corner index (no area, no edges), left out of the clustering and the
+  /// coarse mesh; in `clustering` they take the cluster of a face sharing a corner (cluster 0
+  /// where none does).
+  uint64_t collapsed_faces = 0;
   double cluster_seconds = 0;  ///< the first cluster() call
   double fix_seconds = 0;      ///< defect searches, fixes and the fix rounds' cluster() calls (0 when the
                                ///< first coarse mesh had no defect: building it was the search)
@@ -377,9 +381,10 @@ struct CoarsenMeshResult {
 
 /// Coarsens `mesh` to exactly n = options.cluster.clusters vertices (Fan et al. 6.1) and makes the
 /// clustering valid first, so that its dual is a manifold like the input:
-///  0. a mesh with pinched vertices or whose orientable components are not consistently oriented
-///     is prepared first, on a copy (prepare_surface: split_vertices, reoriented_faces), so that a
-///     surface that is a manifold but for those counts as one below;
+///  0. faces with a repeated corner (collapsed_faces) are left out, and a mesh with pinched
+///     vertices or whose orientable components are not consistently oriented is prepared first,
+///     on a copy (prepare_surface: split_vertices, reoriented_faces), so that a surface that is a
+///     manifold but for those counts as one below;
 ///  1. allocate_component_clusters shares n among the components (OptionError when n is too small);
 ///  2. cluster() with those counts per component (on a single-component mesh: exactly the plain
 ///     cluster() result);

@@ -109,6 +109,15 @@ std::vector<uint8_t> faces_to_orient(const Mesh& mesh, const Topology& topology)
 ///         == 0.
 uint64_t split_pinched_vertices(Mesh& mesh, Topology& topology);
 
+/// Removes the faces with a repeated corner index (collapsed: no area and no edges, e.g. left by
+/// welding a sliver), keeping the others in order, and source_polygon in step with them (made
+/// explicit when it was empty). Vertices are left as they are (some may then be unreferenced).
+///
+/// Input : mesh. Output: the number of faces removed; kept_index (optional): for each face of the
+///         mesh as given, its index after, or kNone when removed. The caller rebuilds the topology.
+///         O(F).
+uint64_t remove_collapsed_faces(Mesh& mesh, std::vector<uint32_t>* kept_index = nullptr);
+
 /// What prepare_surface changed.
 struct SurfacePreparation {
   uint64_t split_vertices = 0;  ///< split_pinched_vertices' copies
