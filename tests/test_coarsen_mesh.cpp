@@ -482,6 +482,14 @@ TEST_CASE("coarsen_mesh: faces with a repeated corner are left out and take a ne
       CHECK(shared);
     }
   }
+  // A density given per face of the mesh as passed (collapsed faces included) follows the faces.
+  CoarsenMeshOptions o;
+  o.cluster.clusters = 60;
+  o.cluster.device = "cpu";
+  o.cluster.density.assign(m.face_count(), 1.0f);
+  for (size_t f = 0; f < 640; ++f) o.cluster.density[f] = 4.0f;  // denser on one half
+  CoarsenMeshResult r = coarsen_mesh(m, t, o);
+  check_valid(sphere, r, 60);
 }
 
 TEST_CASE("coarsen_mesh: every component survives with at least its minimum") {
