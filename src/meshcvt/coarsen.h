@@ -371,7 +371,8 @@ struct CoarsenMeshResult {
   uint64_t reoriented_faces = 0;
   /// Faces with a repeated corner index (no area, no edges), left out of the clustering and the
   /// coarse mesh; in `clustering` they take the cluster of a face sharing a corner (cluster 0
-  /// where none does).
+  /// where none does). `allocation` is then that of the mesh without them (each collapsed face
+  /// is a component of its own in build_topology's count, and is not one there).
   uint64_t collapsed_faces = 0;
   double cluster_seconds = 0;  ///< the first cluster() call
   double fix_seconds = 0;      ///< defect searches, fixes and the fix rounds' cluster() calls (0 when the
