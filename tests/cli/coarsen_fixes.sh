@@ -203,6 +203,34 @@ assert r['collapsed_faces'] == 7 and r['defects'] == [], r['collapsed_faces']
 assert r['output']['input_euler_characteristic'] == -4 and r['output']['input_components'] == 1, r['output']
 PY
 
+# A fin on one of the elephant's edges (a fan of six triangles whose first has that edge, its third
+# face: a non-manifold edge): coarsened all the same, with a note that the output cannot keep it.
+python3 - "$data/elephant.off" "$tmp/fin.off" <<'PY'
+import sys
+tok = open(sys.argv[1]).read().split()
+nv, nf = int(tok[1]), int(tok[2])
+body = tok[4:]
+a, b = int(body[3 * nv + 1]), int(body[3 * nv + 2])  # an edge of face 0
+x, y, z = (float(v) for v in body[3 * a:3 * a + 3])
+ring = [b] + [nv + i for i in range(6)]
+with open(sys.argv[2], 'w') as out:
+    out.write(f"OFF\n{nv + 6} {nf + 6} 0\n")
+    for i in range(nv):
+        out.write(' '.join(body[3 * i:3 * i + 3]) + '\n')
+    for i in range(6):
+        out.write(f"{x + 0.01 * (i + 1)} {y + 0.05} {z + 0.01 * (6 - i)}\n")
+    for k in range(nf):
+        out.write(' '.join(body[3 * nv + 4 * k:3 * nv + 4 * k + 4]) + '\n')
+    for i in range(6):
+        out.write(f"3 {a} {ring[i]} {ring[i + 1]}\n")
+PY
+"$cli" coarsen "$tmp/fin.off" -n 100 -o "$tmp/fin-out.off" --device cpu --no-error >"$tmp/out" 2>"$tmp/err" ||
+  fail "fin: $(cat "$tmp/err")"
+grep -q "note: .*fin.off: 1 non-manifold edge (three faces or more): the coarse mesh cannot keep it" "$tmp/err" ||
+  fail "no note on the non-manifold edge: $(cat "$tmp/err")"
+"$cli" coarsen "$data/elephant.off" -n 100 -o "$tmp/plain-out.off" --device cpu --no-error >"$tmp/out" 2>"$tmp/err"
+grep -q "non-manifold" "$tmp/err" && fail "non-manifold note for the plain elephant: $(cat "$tmp/err")"
+
 # n too small for a genus-3 surface (Heawood: 10 vertices at least): exit 2, numbers named, no output
 set +e
 "$cli" coarsen "$data/elephant.off" -n 9 -o "$tmp/small.off" --device cpu >"$tmp/out" 2>"$tmp/err"
