@@ -2113,6 +2113,20 @@ ShapeApproximation mesh_partition_from_scratch(const Mesh& mesh, const Topology&
 
 ShapeApproximation approximate_shape(const Mesh& mesh, const Topology& topology, const ApproximateOptions& options) {
   validate(mesh, options);
+  // Faces with a repeated corner (welded slivers) have no area and no edges: left out, as
+  // cluster() and coarsen_mesh leave them out (each would be a region of its own, or a piece its
+  // region's repair cannot reach), and given the region of a face at a corner afterwards.
+  if (topology.collapsed_faces > 0 && topology.collapsed_faces < mesh.face_count()) {
+    Mesh kept = mesh;
+    std::vector<uint32_t> kept_index;
+    remove_collapsed_faces(kept, &kept_index);
+    ShapeApproximation out = approximate_shape(kept, build_topology(kept), options);
+    out.labels = labels_with_collapsed_faces(mesh, topology, kept_index, out.labels, 0);
+    if (!out.clustering.labels.empty())
+      out.clustering.labels = labels_with_collapsed_faces(mesh, topology, kept_index, out.clustering.labels, 0);
+    out.collapsed_faces = topology.collapsed_faces;
+    return out;
+  }
   // The L2,1 metric compares face normals: on a mesh whose triangles are ordered at random (boeing,
   // the *-shuffled meshes of libcgal-demo) half of them point the wrong way. Orient a copy first.
   if (topology.orientation_flips > 0) {

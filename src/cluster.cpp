@@ -14,6 +14,7 @@
 #include "meshcvt/cluster.h"
 #include "meshcvt/device.h"
 #include "meshcvt/error.h"
+#include "meshcvt/topology.h"
 #include "parallel.h"
 
 namespace meshcvt {
@@ -131,7 +132,42 @@ Clustering cluster(const Mesh& mesh, const ClusterOptions& options) {
   return cluster(mesh, build_topology(mesh), options);
 }
 
+namespace {
+
+// cluster() of `mesh` without its collapsed faces, the labels given back to every face
+// (labels_with_collapsed_faces: the cluster of a face at a corner). Only without per-component
+// counts (those count the collapsed faces' own components).
+Clustering cluster_without_collapsed_faces(const Mesh& mesh, const Topology& topology, const ClusterOptions& options) {
+  const size_t faces = mesh.face_count();
+  Mesh kept = mesh;
+  std::vector<uint32_t> kept_index;
+  remove_collapsed_faces(kept, &kept_index);
+  ClusterOptions kept_options = options;
+  auto keep = [&]<class T>(const std::vector<T>& per_face, std::vector<T>& out, const char* what) {
+    if (per_face.empty()) return;
+    if (per_face.size() != faces)
+      throw OptionError(std::string(what) + " has " + std::to_string(per_face.size()) + " entries for " +
+                        std::to_string(faces) + " faces");
+    out.clear();
+    for (size_t f = 0; f < faces; ++f)
+      if (kept_index[f] != kNone) out.push_back(per_face[f]);
+  };
+  keep(options.density, kept_options.density, "the density");
+  keep(options.initial_labels, kept_options.initial_labels, "initial_labels");
+  Clustering out = cluster(kept, build_topology(kept), kept_options);
+  out.labels = labels_with_collapsed_faces(mesh, topology, kept_index, out.labels, 0);
+  return out;
+}
+
+}  // namespace
+
 Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOptions& options) {
+  // Faces with a repeated corner (left by welding: assimp-testmodels' spider has 56) have no area
+  // and no edges: each is a component of its own and took a cluster (spider -> 136: 56 clusters of
+  // one such face). They are left out, and take a neighbour's cluster afterwards.
+  if (topology.collapsed_faces > 0 && topology.collapsed_faces < mesh.face_count() &&
+      options.component_clusters.empty())
+    return cluster_without_collapsed_faces(mesh, topology, options);
   auto t_start = Clock::now();
   DeviceChoice choice = resolve_device_for_mesh(options.device, mesh.face_count());
 

@@ -1888,24 +1888,7 @@ CoarsenMeshResult coarsen_without_collapsed_faces(const Mesh& mesh, const Topolo
       if (kept_index[f] != kNone) density.push_back(options.cluster.density[f]);
   }
   CoarsenMeshResult out = coarsen_mesh(kept, build_topology(kept), kept_options);
-  std::vector<uint32_t> labels(faces, 0);
-  for (size_t f = 0; f < faces; ++f) {
-    if (kept_index[f] != kNone) {
-      labels[f] = out.clustering.labels[kept_index[f]];
-      continue;
-    }
-    uint32_t corners[3] = {mesh.indices[3 * f], mesh.indices[3 * f + 1], mesh.indices[3 * f + 2]};
-    std::sort(corners, corners + 3);
-    bool found = false;
-    for (int k = 0; k < 3 && !found; ++k)
-      for (uint32_t i = topology.vertex_face_offsets[corners[k]]; i < topology.vertex_face_offsets[corners[k] + 1]; ++i) {
-        const uint32_t g = topology.vertex_faces[i];
-        if (kept_index[g] == kNone) continue;
-        labels[f] = out.clustering.labels[kept_index[g]];
-        found = true;
-        break;
-      }
-  }
+  std::vector<uint32_t> labels = labels_with_collapsed_faces(mesh, topology, kept_index, out.clustering.labels, 0);
   out.clustering.labels = std::move(labels);
   out.collapsed_faces = topology.collapsed_faces;
   return out;

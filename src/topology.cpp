@@ -771,6 +771,32 @@ uint64_t remove_collapsed_faces(Mesh& mesh, std::vector<uint32_t>* kept_index) {
   return removed;
 }
 
+std::vector<uint32_t> labels_with_collapsed_faces(const Mesh& mesh, const Topology& topology,
+                                                  const std::vector<uint32_t>& kept_index,
+                                                  const std::vector<uint32_t>& kept_labels, uint32_t fallback) {
+  const size_t faces = mesh.face_count();
+  assert(kept_index.size() == faces);
+  std::vector<uint32_t> labels(faces, fallback);
+  for (size_t f = 0; f < faces; ++f) {
+    if (kept_index[f] != kNone) {
+      labels[f] = kept_labels[kept_index[f]];
+      continue;
+    }
+    uint32_t corners[3] = {mesh.indices[3 * f], mesh.indices[3 * f + 1], mesh.indices[3 * f + 2]};
+    std::sort(corners, corners + 3);
+    bool found = false;
+    for (int k = 0; k < 3 && !found; ++k)
+      for (uint32_t i = topology.vertex_face_offsets[corners[k]]; i < topology.vertex_face_offsets[corners[k] + 1]; ++i) {
+        const uint32_t g = topology.vertex_faces[i];
+        if (kept_index[g] == kNone) continue;
+        labels[f] = kept_labels[kept_index[g]];
+        found = true;
+        break;
+      }
+  }
+  return labels;
+}
+
 SurfacePreparation prepare_surface(Mesh& mesh, Topology& topology) {
   SurfacePreparation p;
   p.split_vertices = split_pinched_vertices(mesh, topology);

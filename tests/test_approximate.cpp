@@ -248,6 +248,36 @@ TEST_CASE("approximate, cluster (l21): a cube whose faces are oriented at random
   for (size_t i = 0; i < c.history.size(); ++i) CHECK(c.history[i].energy == c_ref.history[i].energy);
 }
 
+TEST_CASE("approximate: faces with a repeated corner are left out and take a neighbour's region") {
+  // Welded slivers: (a, a, b) faces, no area, no edges. Each was a component of its own, and a
+  // region of its own (or the partition refused: more components than proxies).
+  const Mesh original = cube(4);  // 192 faces
+  Mesh m = original;
+  for (uint32_t k = 0; k < 10; ++k) {
+    const uint32_t* t = &original.indices[3 * size_t(k * 19)];
+    m.indices.insert(m.indices.end(), {t[0], t[2], t[2]});
+  }
+  const ShapeApproximation ref = approximate_shape(original, with_proxies(6));
+  const ShapeApproximation s = approximate_shape(m, with_proxies(6));
+  CHECK(s.collapsed_faces == 10);
+  CHECK(s.regions == 6);
+  CHECK(s.mesh.indices == ref.mesh.indices);
+  CHECK(s.mesh.positions == ref.mesh.positions);
+  CHECK(s.distortion == ref.distortion);
+  REQUIRE(s.labels.size() == m.face_count());
+  CHECK(std::equal(ref.labels.begin(), ref.labels.end(), s.labels.begin()));
+  for (uint32_t k = 0; k < 10; ++k) {  // the region of the lowest face at the lowest corner
+    const uint32_t* t = &original.indices[3 * size_t(k * 19)];
+    const uint32_t corner = std::min(t[0], t[2]);
+    uint32_t lowest = kNone;
+    for (uint32_t g = 0; g < original.face_count() && lowest == kNone; ++g)
+      for (int i = 0; i < 3; ++i)
+        if (original.indices[3 * size_t(g) + i] == corner) lowest = g;
+    CHECK(s.labels[original.face_count() + k] == ref.labels[lowest]);
+  }
+  check_closed_manifold(s);
+}
+
 TEST_CASE("approximate: chamfered box keeps its 10 sharp corners with 7 proxies") {
   Mesh m = prism(kChamferedSection, 1.0, 4, 4);
   ShapeApproximation s = approximate_shape(m, with_proxies(7));

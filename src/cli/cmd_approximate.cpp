@@ -77,7 +77,7 @@ void write_report(const ApproximateArgs& a, const Mesh& mesh, const ReadStats& r
     j.begin_object().value("energy", r.energy).value("moves", r.moves).value("round", r.round).end_object();
   j.end_array();
   j.end_object();
-  j.value("reoriented_faces", s.reoriented_faces);
+  j.value("reoriented_faces", s.reoriented_faces).value("collapsed_faces", s.collapsed_faces);
   j.value("regions", s.regions).value("distortion", s.distortion).value("total_area", s.total_area)
       .value("relative_error", s.relative_error);
   j.begin_object("output").value("vertices", uint64_t(s.mesh.vertex_count()))
@@ -144,6 +144,10 @@ void run_approximate(ApproximateArgs& a) {
   if (s.reoriented_faces > 0 && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s: flipped %llu of %zu faces so that each part is consistently oriented\n",
                  a.input.c_str(), (unsigned long long)s.reoriented_faces, mesh.face_count());
+  if (s.collapsed_faces > 0 && !a.quiet)
+    std::fprintf(stderr, "meshcvt: note: %s: left out %llu face%s with a repeated corner (no area); each takes the region "
+                 "of a face at one of its corners\n",
+                 a.input.c_str(), (unsigned long long)s.collapsed_faces, s.collapsed_faces == 1 ? "" : "s");
 
   auto t0 = Clock::now();
   WriteOptions wo;

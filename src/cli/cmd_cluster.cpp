@@ -82,10 +82,16 @@ void run_cluster(const ClusterArgs& a) {
   Mesh& mesh = input.mesh;
   const LocalityOrder& order = input.order;
   Clustering c;
+  uint64_t collapsed = 0;  // left out by cluster(), see cluster.h
   {
     Topology topology = build_topology(mesh);
     c = cluster(mesh, topology, options);
+    if (topology.collapsed_faces < mesh.face_count()) collapsed = topology.collapsed_faces;
   }
+  if (collapsed > 0 && !a.quiet)
+    std::fprintf(stderr, "meshcvt: note: %s: left out %llu face%s with a repeated corner (no area); each takes the cluster "
+                 "of a face at one of its corners\n",
+                 a.input.c_str(), (unsigned long long)collapsed, collapsed == 1 ? "" : "s");
   restore_input_order(mesh, order);
   c.labels = to_input_order(c.labels, order);
   if (progress) std::fprintf(stderr, "\r%60s\r", "");

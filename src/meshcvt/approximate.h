@@ -201,6 +201,10 @@ struct ShapeApproximation {
   /// approximate_shape only: faces flipped so that every orientable component is consistently
   /// oriented (orient_consistently) before anything else; the output follows the flipped faces.
   uint64_t reoriented_faces = 0;
+  /// approximate_shape only: faces with a repeated corner index (no area, no edges), left out of
+  /// the partition and the meshing; in `labels` (and clustering.labels) they take the region of a
+  /// face at one of their corners (labels_with_collapsed_faces, topology.h).
+  uint64_t collapsed_faces = 0;
 
   /// The clustering (empty for mesh_partition). After teleports or error-driven rounds, `labels` /
   /// `generators` are those of the end result and `history` goes on over every teleport and round:

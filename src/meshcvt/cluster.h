@@ -122,6 +122,11 @@ struct Clustering {
 };
 
 /// Clusters the faces of `mesh` into exactly options.clusters connected clusters.
+/// Faces with a repeated corner index (collapsed: no area and no edges, e.g. welded slivers) are
+/// left out, unless component_clusters is given or every face is collapsed: the clusters are those
+/// of the other faces (they count as no component), and each collapsed face takes the cluster of
+/// the lowest face at its lowest corner that has one (labels_with_collapsed_faces; cluster 0 where
+/// none shares a corner). density and initial_labels still have an entry per face.
 /// Throws OptionError when n = 0, n > faces, or n < number of connected components (the message
 /// names the numbers), when component_clusters or initial_labels do not fit the mesh as documented
 /// above, DeviceError when a GPU was asked for and cannot run.

@@ -118,6 +118,17 @@ uint64_t split_pinched_vertices(Mesh& mesh, Topology& topology);
 ///         O(F).
 uint64_t remove_collapsed_faces(Mesh& mesh, std::vector<uint32_t>* kept_index = nullptr);
 
+/// Per-face labels of `mesh` from those of the mesh remove_collapsed_faces made of it: a kept face
+/// takes its own (kept_labels[kept_index[f]]), a removed one the label of the lowest kept face at
+/// its lowest corner that has one, or `fallback` where no kept face shares a corner with it.
+///
+/// Input : mesh and topology = build_topology(mesh); kept_index as remove_collapsed_faces gave it;
+///         kept_labels, one per kept face. Output: mesh.face_count() labels. O(F + removed faces x
+///         their corners' valence).
+std::vector<uint32_t> labels_with_collapsed_faces(const Mesh& mesh, const Topology& topology,
+                                                  const std::vector<uint32_t>& kept_index,
+                                                  const std::vector<uint32_t>& kept_labels, uint32_t fallback);
+
 /// What prepare_surface changed.
 struct SurfacePreparation {
   uint64_t split_vertices = 0;  ///< split_pinched_vertices' copies
