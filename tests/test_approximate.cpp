@@ -252,11 +252,7 @@ TEST_CASE("approximate: faces with a repeated corner are left out and take a nei
   // Welded slivers: (a, a, b) faces, no area, no edges. Each was a component of its own, and a
   // region of its own (or the partition refused: more components than proxies).
   const Mesh original = cube(4);  // 192 faces
-  Mesh m = original;
-  for (uint32_t k = 0; k < 10; ++k) {
-    const uint32_t* t = &original.indices[3 * size_t(k * 19)];
-    m.indices.insert(m.indices.end(), {t[0], t[2], t[2]});
-  }
+  const Mesh m = test::with_collapsed_faces(original, 10, 19);
   const ShapeApproximation ref = approximate_shape(original, with_proxies(6));
   const ShapeApproximation s = approximate_shape(m, with_proxies(6));
   CHECK(s.collapsed_faces == 10);
@@ -266,14 +262,10 @@ TEST_CASE("approximate: faces with a repeated corner are left out and take a nei
   CHECK(s.distortion == ref.distortion);
   REQUIRE(s.labels.size() == m.face_count());
   CHECK(std::equal(ref.labels.begin(), ref.labels.end(), s.labels.begin()));
-  for (uint32_t k = 0; k < 10; ++k) {  // the region of the lowest face at the lowest corner
-    const uint32_t* t = &original.indices[3 * size_t(k * 19)];
-    const uint32_t corner = std::min(t[0], t[2]);
-    uint32_t lowest = kNone;
-    for (uint32_t g = 0; g < original.face_count() && lowest == kNone; ++g)
-      for (int i = 0; i < 3; ++i)
-        if (original.indices[3 * size_t(g) + i] == corner) lowest = g;
-    CHECK(s.labels[original.face_count() + k] == ref.labels[lowest]);
+  for (size_t f = original.face_count(); f < m.face_count(); ++f) {  // the lowest face at the lowest corner's
+    const uint32_t lowest = test::lowest_face_at(original, test::lowest_corner(m, f), original.face_count());
+    REQUIRE(lowest != kNone);
+    CHECK(s.labels[f] == ref.labels[lowest]);
   }
   check_closed_manifold(s);
 }

@@ -532,12 +532,8 @@ TEST_CASE("faces with a repeated corner are left out of the clustering and take 
   // Welding slivers leaves faces like (a, a, b): no area, no edges, each a component of its own.
   // Each took one of the n clusters (assimp-testmodels' spider -> 136: 56 clusters of one such face).
   const Mesh sphere = test::icosphere(3);  // 1280 faces
-  Mesh m = sphere;
   const uint32_t collapsed = 20;
-  for (uint32_t k = 0; k < collapsed; ++k) {
-    const uint32_t* t = &sphere.indices[3 * size_t(k * 61)];
-    m.indices.insert(m.indices.end(), {t[1], t[1], t[2]});
-  }
+  const Mesh m = test::with_collapsed_faces(sphere, collapsed, 61);
   REQUIRE(build_topology(m).collapsed_faces == collapsed);
   ClusterOptions o;
   o.clusters = 100;
@@ -547,13 +543,8 @@ TEST_CASE("faces with a repeated corner are left out of the clustering and take 
   REQUIRE(c.labels.size() == m.face_count());
   // The sphere's faces are clustered as without the collapsed ones: all 100 clusters are theirs.
   CHECK(std::equal(plain.labels.begin(), plain.labels.end(), c.labels.begin()));
-  for (uint32_t k = 0; k < collapsed; ++k) {  // the cluster of the lowest face at the lowest corner
-    const uint32_t f = uint32_t(sphere.face_count()) + k;
-    const uint32_t corner = std::min(m.indices[3 * f], m.indices[3 * f + 2]);
-    uint32_t lowest = kNone;
-    for (uint32_t g = 0; g < sphere.face_count() && lowest == kNone; ++g)
-      for (int i = 0; i < 3; ++i)
-        if (sphere.indices[3 * size_t(g) + i] == corner) lowest = g;
+  for (size_t f = sphere.face_count(); f < m.face_count(); ++f) {  // the lowest face at the lowest corner's
+    const uint32_t lowest = test::lowest_face_at(sphere, test::lowest_corner(m, f), sphere.face_count());
     REQUIRE(lowest != kNone);
     CHECK(c.labels[f] == plain.labels[lowest]);
   }

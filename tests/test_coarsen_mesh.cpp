@@ -457,12 +457,8 @@ TEST_CASE("coarsen_mesh: faces with a repeated corner are left out and take a ne
   // Each took a cluster, whose coarse vertex no triangle used (assimp-testmodels' spider.obj ->
   // 136 kept 56 such vertices and 56 defects).
   const Mesh sphere = test::icosphere(3);  // 1280 faces
-  Mesh m = sphere;
   const uint32_t collapsed = 20;
-  for (uint32_t k = 0; k < collapsed; ++k) {
-    const uint32_t* t = &sphere.indices[3 * size_t(k * 61)];
-    m.indices.insert(m.indices.end(), {t[0], t[1], t[0]});
-  }
+  const Mesh m = test::with_collapsed_faces(sphere, collapsed, 61);
   const Topology t = build_topology(m);
   REQUIRE(t.collapsed_faces == collapsed);
   REQUIRE(t.component_count == 1 + collapsed);
@@ -472,14 +468,10 @@ TEST_CASE("coarsen_mesh: faces with a repeated corner are left out and take a ne
     CHECK(r.collapsed_faces == collapsed);
     check_valid(sphere, r, n);  // the sphere's counts: chi 2, one component
     REQUIRE(r.clustering.labels.size() == m.face_count());
-    for (uint32_t k = 0; k < collapsed; ++k) {  // the cluster of a face at the collapsed face's corner
-      const uint32_t f = uint32_t(sphere.face_count()) + k;
-      const uint32_t lowest = std::min(m.indices[3 * f], m.indices[3 * f + 1]);
-      bool shared = false;
-      for (size_t g = 0; g < sphere.face_count(); ++g)
-        for (int c = 0; c < 3; ++c)
-          shared = shared || (sphere.indices[3 * g + c] == lowest && r.clustering.labels[g] == r.clustering.labels[f]);
-      CHECK(shared);
+    for (size_t f = sphere.face_count(); f < m.face_count(); ++f) {  // the lowest face at the lowest corner's
+      const uint32_t lowest = test::lowest_face_at(sphere, test::lowest_corner(m, f), sphere.face_count());
+      REQUIRE(lowest != kNone);
+      CHECK(r.clustering.labels[f] == r.clustering.labels[lowest]);
     }
   }
   // A density given per face of the mesh as passed (collapsed faces included) follows the faces.

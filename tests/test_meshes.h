@@ -2,6 +2,7 @@
 // edges, slivers), so tests need no files and cover the shapes that matter.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -51,6 +52,33 @@ inline double signed_volume6(const Mesh& m) {
          double(a[2]) * (double(b[0]) * c[1] - double(b[1]) * c[0]);
   }
   return v;
+}
+
+// `m` with `count` collapsed faces appended (as welding a sliver leaves them): for k < count, face
+// k * stride's corners (a, b, c) give (a, b, a) when k is even and (b, b, c) when odd.
+inline Mesh with_collapsed_faces(const Mesh& m, uint32_t count, uint32_t stride) {
+  Mesh out = m;
+  for (uint32_t k = 0; k < count; ++k) {
+    const uint32_t* t = &m.indices[3 * size_t(k) * stride];
+    if (k % 2 == 0)
+      out.indices.insert(out.indices.end(), {t[0], t[1], t[0]});
+    else
+      out.indices.insert(out.indices.end(), {t[1], t[1], t[2]});
+  }
+  return out;
+}
+
+// The lowest face of m with vertex v among its first `faces` faces, or kNone.
+inline uint32_t lowest_face_at(const Mesh& m, uint32_t v, size_t faces) {
+  for (size_t g = 0; g < faces; ++g)
+    for (int i = 0; i < 3; ++i)
+      if (m.indices[3 * g + i] == v) return uint32_t(g);
+  return kNone;
+}
+
+// The lowest corner of face f.
+inline uint32_t lowest_corner(const Mesh& m, size_t f) {
+  return std::min({m.indices[3 * f], m.indices[3 * f + 1], m.indices[3 * f + 2]});
 }
 
 /// Open grid of nx*ny quads (2 triangles each) over [0,sx]x[0,sy], height z = bump*sin(x)cos(y).

@@ -97,20 +97,7 @@ ls "$tmp" | grep -q "^bad" && fail "a failed run left a file: $(ls "$tmp" | grep
 
 # Faces with a repeated corner (welded slivers): left out with a note, each given the region of a
 # face at a corner; the output is the plain elephant's.
-$py - "$data/elephant.off" "$tmp/collapsed.off" <<'PY'
-import sys
-tok = open(sys.argv[1]).read().split()
-nv, nf = int(tok[1]), int(tok[2])
-body = tok[4:]
-faces = [body[3 * nv + 4 * k: 3 * nv + 4 * k + 4] for k in range(nf)]
-extra = [['3', f[1], f[1], f[2]] for f in faces[:: nf // 7][:7]]
-with open(sys.argv[2], 'w') as out:
-    out.write(f"OFF\n{nv} {nf + len(extra)} 0\n")
-    for i in range(nv):
-        out.write(' '.join(body[3 * i:3 * i + 3]) + '\n')
-    for f in faces + extra:
-        out.write(' '.join(f) + '\n')
-PY
+$py "$(dirname "$0")/with_collapsed_faces.py" "$data/elephant.off" "$tmp/collapsed.off" 7
 "$cli" approximate "$tmp/collapsed.off" -n 40 --device cpu -o "$tmp/collapsed-out.off" --report "$tmp/collapsed.json" \
   2>"$tmp/err.txt" >/dev/null || fail "collapsed faces: $(cat "$tmp/err.txt")"
 grep -q "note: .*collapsed.off: left out 7 faces with a repeated corner" "$tmp/err.txt" ||

@@ -94,20 +94,7 @@ grep -q "missing.off" "$tmp/err" || fail "missing file: message should name the 
 [ ! -e "$tmp/bad.ply" ] || fail "an output was written despite the error"
 # Faces with a repeated corner (welded slivers): left out with a note; all n clusters are the
 # surface's, and each collapsed face takes the cluster of a face at one of its corners.
-python3 - "$data/elephant.off" "$tmp/collapsed.off" <<'PY'
-import sys
-tok = open(sys.argv[1]).read().split()
-nv, nf = int(tok[1]), int(tok[2])
-body = tok[4:]
-faces = [body[3 * nv + 4 * k: 3 * nv + 4 * k + 4] for k in range(nf)]
-extra = [['3', f[1], f[1], f[2]] for f in faces[:: nf // 7][:7]]
-with open(sys.argv[2], 'w') as out:
-    out.write(f"OFF\n{nv} {nf + len(extra)} 0\n")
-    for i in range(nv):
-        out.write(' '.join(body[3 * i:3 * i + 3]) + '\n')
-    for f in faces + extra:
-        out.write(' '.join(f) + '\n')
-PY
+python3 "$(dirname "$0")/with_collapsed_faces.py" "$data/elephant.off" "$tmp/collapsed.off" 7
 "$meshcvt" cluster "$tmp/collapsed.off" -n 50 -o "$tmp/collapsed.ply" --labels "$tmp/collapsed.txt" --device cpu \
   >/dev/null 2>"$tmp/err" || fail "collapsed faces: $(cat "$tmp/err")"
 grep -q "note: .*collapsed.off: left out 7 faces with a repeated corner" "$tmp/err" ||

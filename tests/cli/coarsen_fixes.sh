@@ -175,20 +175,7 @@ PY
 # Faces with a repeated corner (welded slivers, as in assimp-testmodels' spider.obj): left out with
 # a note, so the output is the elephant's surface with n vertices all used, and the printed and
 # reported chi are the surface's.
-python3 - "$data/elephant.off" "$tmp/collapsed.off" <<'PY'
-import sys
-tok = open(sys.argv[1]).read().split()
-nv, nf = int(tok[1]), int(tok[2])
-body = tok[4:]
-faces = [body[3 * nv + 4 * k: 3 * nv + 4 * k + 4] for k in range(nf)]
-extra = [['3', f[1], f[1], f[2]] for f in faces[:: nf // 7][:7]]
-with open(sys.argv[2], 'w') as out:
-    out.write(f"OFF\n{nv} {nf + len(extra)} 0\n")
-    for i in range(nv):
-        out.write(' '.join(body[3 * i:3 * i + 3]) + '\n')
-    for f in faces + extra:
-        out.write(' '.join(f) + '\n')
-PY
+python3 "$(dirname "$0")/with_collapsed_faces.py" "$data/elephant.off" "$tmp/collapsed.off" 7
 "$cli" coarsen "$tmp/collapsed.off" -n 100 -o "$tmp/collapsed-out.off" --device cpu --no-error \
   --report "$tmp/collapsed.json" >"$tmp/out" 2>"$tmp/err" || fail "collapsed faces: $(cat "$tmp/err")"
 grep -q "note: .*collapsed.off: left out 7 faces with a repeated corner (no area)" "$tmp/err" ||
