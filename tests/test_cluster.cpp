@@ -540,14 +540,9 @@ TEST_CASE("faces with a repeated corner are left out of the clustering and take 
   o.device = "cpu";
   const Clustering plain = cluster(sphere, o);
   const Clustering c = cluster(m, o);
-  REQUIRE(c.labels.size() == m.face_count());
-  // The sphere's faces are clustered as without the collapsed ones: all 100 clusters are theirs.
-  CHECK(std::equal(plain.labels.begin(), plain.labels.end(), c.labels.begin()));
-  for (size_t f = sphere.face_count(); f < m.face_count(); ++f) {  // the lowest face at the lowest corner's
-    const uint32_t lowest = test::lowest_face_at(sphere, test::lowest_corner(m, f), sphere.face_count());
-    REQUIRE(lowest != kNone);
-    CHECK(c.labels[f] == plain.labels[lowest]);
-  }
+  // The sphere's faces are clustered as without the collapsed ones (all 100 clusters are theirs),
+  // and each collapsed face takes the cluster of the lowest face at its lowest corner.
+  CHECK(c.labels == test::labels_at_lowest_corners(m, plain.labels));
   // Per-face options are given for every face, the collapsed ones included.
   ClusterOptions per_face = o;
   per_face.density.assign(m.face_count(), 1.0f);

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <map>
 #include <utility>
+#include <vector>
 
 #include "meshcvt/mesh.h"
 
@@ -68,17 +69,20 @@ inline Mesh with_collapsed_faces(const Mesh& m, uint32_t count, uint32_t stride)
   return out;
 }
 
-// The lowest face of m with vertex v among its first `faces` faces, or kNone.
-inline uint32_t lowest_face_at(const Mesh& m, uint32_t v, size_t faces) {
-  for (size_t g = 0; g < faces; ++g)
-    for (int i = 0; i < 3; ++i)
-      if (m.indices[3 * g + i] == v) return uint32_t(g);
-  return kNone;
-}
-
-// The lowest corner of face f.
-inline uint32_t lowest_corner(const Mesh& m, size_t f) {
-  return std::min({m.indices[3 * f], m.indices[3 * f + 1], m.indices[3 * f + 2]});
+// The labels expected for `m` = a surface's first `surface_labels.size()` faces with collapsed
+// faces after them: the surface's labels, then for each collapsed face the label of the lowest
+// surface face at its lowest corner (kNone where no surface face has that corner).
+inline std::vector<uint32_t> labels_at_lowest_corners(const Mesh& m, const std::vector<uint32_t>& surface_labels) {
+  std::vector<uint32_t> expected = surface_labels;
+  for (size_t f = surface_labels.size(); f < m.face_count(); ++f) {
+    const uint32_t corner = std::min({m.indices[3 * f], m.indices[3 * f + 1], m.indices[3 * f + 2]});
+    uint32_t label = kNone;
+    for (size_t g = 0; g < surface_labels.size() && label == kNone; ++g)
+      for (int i = 0; i < 3; ++i)
+        if (m.indices[3 * g + i] == corner) label = surface_labels[g];
+    expected.push_back(label);
+  }
+  return expected;
 }
 
 /// Open grid of nx*ny quads (2 triangles each) over [0,sx]x[0,sy], height z = bump*sin(x)cos(y).
