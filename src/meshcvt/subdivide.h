@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "meshcvt/mesh.h"
 
@@ -32,5 +33,43 @@ Mesh subdivide_midpoint(const Mesh& mesh, unsigned levels);
 /// Throws OptionError when min_faces_per_cluster is negative, NaN or infinite, or when faces is 0
 /// and the target is not (no number of levels helps).
 unsigned subdivision_levels_for(size_t faces, uint32_t clusters, double min_faces_per_cluster = 10);
+
+}  // namespace meshcvt
+
+namespace meshcvt {
+
+/// What split_long_edges made.
+struct SplitEdgesResult {
+  Mesh mesh;                    ///< the refined mesh (input vertices keep their ids, midpoints follow)
+  std::vector<uint32_t> parent; ///< per output face: the input face it lies in
+  uint64_t split_edges = 0;     ///< edges split, over all rounds
+  unsigned rounds = 0;          ///< rounds of splitting (0: nothing was too long)
+};
+
+/// Splits every edge longer than its limit at its midpoint, with longest-edge (Rivara) refinement,
+/// until no edge is longer: what a clustering needs where faces are longer than its clusters are
+/// wide (CAD exports' long thin triangles), without refining the rest as subdivide_midpoint would.
+///
+/// Input : mesh (boundaries and non-manifold edges are fine: every face on a split edge is split
+///         there; faces with a repeated corner are kept as they are); the limit, in the input's
+///         units, either max_length for every face or face_max_length[f] for input face f (then
+///         max_length is ignored). An edge is too long when it is longer than the limit of any
+///         face on it; children keep their input face's limit.
+/// Output: the refined mesh: each face is split across its own longest edge first (so no new angle
+///         is below half of one it had), then each half across its other split edge, so a face
+///         becomes 1 to 4 faces per round. Orientation, watertightness and the Euler characteristic
+///         are kept; the midpoints are at 0.5 a + 0.5 b (float). The faces of input face f come out
+///         together, in input face order, parent[i] naming f; source_polygon follows (the input
+///         face id when the input has none and anything was split; left empty when nothing was).
+///         The same input gives the same output.
+/// Throws OptionError on a limit that is not finite and > 0, arrays of the wrong size, or a result
+/// beyond 32-bit indices.
+SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std::vector<double>& face_max_length = {});
+
+/// The edge length of a coarse mesh of `clusters` vertices made of equilateral triangles, closed,
+/// over a surface of total weight `weight` (area x density), where the density is `density`:
+/// sqrt(2 weight / (sqrt 3 clusters density)). In the units of the surface (a length).
+/// Throws OptionError unless weight is finite and >= 0, clusters > 0 and density finite and > 0.
+double coarse_edge_length(double weight, uint32_t clusters, double density = 1.0);
 
 }  // namespace meshcvt
