@@ -101,15 +101,6 @@ void barycentric(const double p[3], const double a[3], const double b[3], const 
   out[0] = 1 - v - w, out[1] = v, out[2] = w;
 }
 
-double face_area(const Mesh& mesh, size_t f) {
-  const float* a = &mesh.positions[3 * size_t(mesh.indices[3 * f])];
-  const float* b = &mesh.positions[3 * size_t(mesh.indices[3 * f + 1])];
-  const float* c = &mesh.positions[3 * size_t(mesh.indices[3 * f + 2])];
-  double e1[3], e2[3];
-  for (int d = 0; d < 3; ++d) e1[d] = double(b[d]) - a[d], e2[d] = double(c[d]) - a[d];
-  const double x = e1[1] * e2[2] - e1[2] * e2[1], y = e1[2] * e2[0] - e1[0] * e2[2], z = e1[0] * e2[1] - e1[1] * e2[0];
-  return 0.5 * std::sqrt(x * x + y * y + z * z);
-}
 
 void corners(const Mesh& coarse, uint32_t triangle, double t[3][3]) {
   for (int j = 0; j < 3; ++j)

@@ -69,6 +69,7 @@
 #include "meshcvt/error.h"
 #include "coarse_fit.h"
 #include "symmetric_eigen3.h"
+#include "vec3.h"
 
 namespace meshcvt {
 
@@ -79,17 +80,6 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 
 bool is_collapsed(const uint32_t* t) { return t[0] == t[1] || t[1] == t[2] || t[0] == t[2]; }
 
-double face_area(const Mesh& mesh, size_t f) {
-  const float* p[3];
-  for (int k = 0; k < 3; ++k) p[k] = &mesh.positions[3 * size_t(mesh.indices[3 * f + k])];
-  double u[3], w[3];
-  for (int d = 0; d < 3; ++d) {
-    u[d] = double(p[1][d]) - p[0][d];
-    w[d] = double(p[2][d]) - p[0][d];
-  }
-  double c[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-  return 0.5 * std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-}
 
 void check_density(const Mesh& mesh, const std::vector<float>* density) {
   if (!density || density->empty()) return;

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "meshcvt/error.h"
+#include "vec3.h"
 
 namespace meshcvt {
 
@@ -99,14 +100,7 @@ SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std
   for (size_t f = 0; f < nf; ++f) {
     const uint32_t* t = &mesh.indices[3 * f];
     const double l = face_max_length.empty() ? max_length : face_max_length[f];
-    double e[2][3];
-    for (int d = 0; d < 3; ++d) {
-      e[0][d] = double(mesh.positions[3 * size_t(t[1]) + d]) - mesh.positions[3 * size_t(t[0]) + d];
-      e[1][d] = double(mesh.positions[3 * size_t(t[2]) + d]) - mesh.positions[3 * size_t(t[0]) + d];
-    }
-    const double c[3] = {e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
-                         e[0][0] * e[1][1] - e[0][1] * e[1][0]};
-    area_bound += 0.5 * std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) / (std::sqrt(3.0) / 4 * l * l);
+    area_bound += face_area(mesh, f) / (std::sqrt(3.0) / 4 * l * l);
     for (int k = 0; k < 3; ++k) edge_bound += 0.5 * std::sqrt(length2(mesh.positions, t[k], t[(k + 1) % 3])) / l;
   }
   if (!(std::max(area_bound, edge_bound) <= double(kMaxFaces)))

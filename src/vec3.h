@@ -26,4 +26,11 @@ inline Vec3 mesh_vertex(const Mesh& mesh, uint32_t v) {
   return {p[0], p[1], p[2]};
 }
 
+/// Area of face f of `mesh`, in double (half the length of (b - a) x (c - a)), in squared input units.
+inline double face_area(const Mesh& mesh, size_t f) {
+  const uint32_t* t = &mesh.indices[3 * f];
+  const Vec3 a = mesh_vertex(mesh, t[0]);
+  return 0.5 * length(cross(mesh_vertex(mesh, t[1]) - a, mesh_vertex(mesh, t[2]) - a));
+}
+
 }  // namespace meshcvt

@@ -13,6 +13,7 @@
 #include "cli/command.h"
 #include "cli/json.h"
 #include "parallel.h"
+#include "vec3.h"
 #include "meshcvt/cluster.h"
 #include "meshcvt/coarsen.h"
 #include "meshcvt/density.h"
@@ -72,17 +73,7 @@ T sum_over_faces(size_t faces, unsigned threads, const Fn& fn) {
 double surface_weight(const Mesh& mesh, const std::vector<float>& density, unsigned threads) {
   return sum_over_faces<double>(mesh.face_count(), threads, [&](size_t first, size_t last) {
     double weight = 0;
-    for (size_t f = first; f < last; ++f) {
-      const uint32_t* t = &mesh.indices[3 * f];
-      double e[2][3];
-      for (int d = 0; d < 3; ++d) {
-        e[0][d] = double(mesh.positions[3 * size_t(t[1]) + d]) - mesh.positions[3 * size_t(t[0]) + d];
-        e[1][d] = double(mesh.positions[3 * size_t(t[2]) + d]) - mesh.positions[3 * size_t(t[0]) + d];
-      }
-      const double c[3] = {e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
-                           e[0][0] * e[1][1] - e[0][1] * e[1][0]};
-      weight += 0.5 * std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) * (density.empty() ? 1.0 : double(density[f]));
-    }
+    for (size_t f = first; f < last; ++f) weight += face_area(mesh, f) * (density.empty() ? 1.0 : double(density[f]));
     return weight;
   });
 }
