@@ -211,8 +211,10 @@ void run_coarsen(const CoarsenArgs& a) {
     }
   }
   // --split-edges R: input edges longer than 1/R of the coarse mesh's edge length are split first,
-  // so that no face is longer than a cluster is wide. Also counted without it, for the hint below.
-  const double weight = surface_weight(mesh, density, a.threads);
+  // so that no face is longer than a cluster is wide. Also counted without it, for the note below
+  // and the report (neither wanted: not counted).
+  const bool measure_edges = a.split_edges > 0 || !a.quiet || !a.report.empty();
+  const double weight = measure_edges ? surface_weight(mesh, density, a.threads) : 0;
   const double coarse_edge = weight > 0 ? coarse_edge_length(weight, a.clusters) : 0;
   const uint64_t long_edges = coarse_edge > 0 ? edges_longer_than(mesh, coarse_edge, a.threads) : 0;
   uint64_t split_edges = 0;
