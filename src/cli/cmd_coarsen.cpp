@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <utility>
 #include <vector>
@@ -39,8 +40,23 @@ struct CoarsenArgs {
   bool quiet = false, no_weld = false, no_error = false, no_flips = false, no_fit_swaps = false;
   double gradation = 0;   ///< --gradation g: curvature-adaptive density (meshcvt/density.h); 0 = uniform
   std::string subdivide;  ///< --subdivide auto|K: "" = the placement's default (subdivides_by_default)
-  double split_edges = 0; ///< --split-edges R: split edges longer than the coarse edge length / R first; 0 = off
+  std::string split_edges = "auto";  ///< --split-edges auto|R (parse_split_edges)
 };
+
+// --split-edges: "auto" -> kSplitAuto, "off" -> 0, a number R in [0, 16] -> R (0 = off); else OptionError.
+constexpr double kSplitAuto = -1;
+// What auto splits with: edges longer than 1 / 1.5 of the coarse edge (bench/RESULTS.md, "Coarsening:
+// long faces": 0.5 and 0.7 gave part of the gain, 2 and 3 refine more for less).
+constexpr double kAutoSplitRatio = 1.5;
+double parse_split_edges(const std::string& s) {
+  if (s == "auto") return kSplitAuto;
+  if (s == "off") return 0;
+  char* end = nullptr;
+  const double r = std::strtod(s.c_str(), &end);
+  if (s.empty() || *end != '\0' || !(r >= 0 && r <= 16))
+    throw OptionError("--split-edges must be auto, off or a ratio within [0, 16], not '" + s + "'");
+  return r;
+}
 
 // --subdivide: "" -> 0 levels, or kSubdivideAuto where the placement subdivides by default;
 // "0".."6" -> that many, "auto" -> kSubdivideAuto; else OptionError.
@@ -151,8 +167,7 @@ void run_coarsen(const CoarsenArgs& a) {
   CoarsenOptions co;
   co.placement = parse_vertex_placement(a.placement);
   int subdivide = parse_subdivide(a.subdivide, co.placement);
-  if (!(a.split_edges >= 0 && a.split_edges <= 16))
-    throw OptionError("--split-edges must be within [0, 16], not " + std::to_string(a.split_edges));
+  const double split_option = parse_split_edges(a.split_edges);
   if (!(a.gradation >= 0) || !std::isfinite(a.gradation))
     throw OptionError("--gradation must be a finite number >= 0, not " + std::to_string(a.gradation));
   co.threads = a.threads;
@@ -210,23 +225,33 @@ void run_coarsen(const CoarsenArgs& a) {
       density = std::move(fine);
     }
   }
-  // --split-edges R: input edges longer than 1/R of the coarse mesh's edge length are split first,
-  // so that no face is longer than a cluster is wide. Also counted without it, for the note below
-  // and the report (neither wanted: not counted).
-  const bool measure_edges = a.split_edges > 0 || !a.quiet || !a.report.empty();
+  // --split-edges: input edges longer than 1/R of the coarse mesh's edge length are split first, so
+  // that no face is longer than a cluster is wide. auto: R = kAutoSplitRatio where at least one edge
+  // per cluster is that long (on libcgal-demo's meshes at faces / 10 and / 40, 39 of the 45 such
+  // runs gained Q avg and no defect; three gained defects, hence the fallback below:
+  // bench/RESULTS.md, "Coarsening: long faces"). The count is also reported.
+  const bool measure_edges = split_option != 0 || !a.quiet || !a.report.empty();
   const double weight = measure_edges ? surface_weight(mesh, density, a.threads) : 0;
   const double coarse_edge = weight > 0 ? coarse_edge_length(weight, a.clusters) : 0;
   const uint64_t long_edges = coarse_edge > 0 ? edges_longer_than(mesh, coarse_edge, a.threads) : 0;
-  uint64_t split_edges = 0;
+  const bool auto_split = split_option == kSplitAuto;
+  const double split_ratio = !auto_split ? split_option : long_edges >= a.clusters ? kAutoSplitRatio : 0;
   const size_t faces_before_split = mesh.face_count();
-  if (a.split_edges > 0 && weight > 0) {
+  uint64_t split_edges = 0;
+  Mesh unsplit;  // auto: the input as it was before the split, for the fallback
+  std::vector<float> unsplit_density;
+  if (split_ratio > 0 && weight > 0) {
     std::vector<double> face_limit;  // with a density: where clusters are smaller, so are the limits
     if (!density.empty())
       for (size_t f = 0; f < mesh.face_count(); ++f)
-        face_limit.push_back(coarse_edge_length(weight, a.clusters, double(density[f])) / a.split_edges);
-    SplitEdgesResult split = split_long_edges(mesh, coarse_edge / a.split_edges, face_limit);
+        face_limit.push_back(coarse_edge_length(weight, a.clusters, double(density[f])) / split_ratio);
+    SplitEdgesResult split = split_long_edges(mesh, coarse_edge / split_ratio, face_limit);
     split_edges = split.split_edges;
     if (split_edges > 0) {
+      if (auto_split) {
+        unsplit = mesh;
+        unsplit_density = density;
+      }
       if (!density.empty()) {
         std::vector<float> fine(split.parent.size());
         for (size_t f = 0; f < fine.size(); ++f) fine[f] = density[split.parent[f]];
@@ -235,30 +260,81 @@ void run_coarsen(const CoarsenArgs& a) {
       mesh = std::move(split.mesh);
     }
   }
-  // At least one edge per cluster longer than a coarse edge: faces too long for round clusters (on
-  // libcgal-demo's meshes at faces / 10 and / 40, 39 of the 45 runs with this many gained Q avg and
-  // no defect with --split-edges 1.5; three gained defects: bench/RESULTS.md, "Coarsening: long
-  // faces". So a note, not a default.)
-  if (a.split_edges == 0 && long_edges >= a.clusters && !a.quiet)
+  if (split_option == 0 && long_edges >= a.clusters && !a.quiet)
     std::fprintf(stderr,
                  "meshcvt: note: %s: %llu edges are longer than the coarse mesh's edges (%.4g): faces that long "
-                 "make thin clusters and thin triangles; --split-edges 1.5 splits them first\n",
+                 "make thin clusters and thin triangles; --split-edges auto (the default) splits them first\n",
                  a.input.c_str(), (unsigned long long)long_edges, coarse_edge);
-  // Large meshes are clustered in an order with locality (mesh_order.h); the output does not
-  // depend on the input's face order other than through it.
-  const LocalityOrder order = reorder_for_locality(mesh);
-  options.density = to_reordered(density, order);  // coarsen_mesh weighs both the clusters and the dual with it
-  const double prepare_s = seconds(t0);
+  double prepare_s = seconds(t0);
   // The library's message names the numbers; the command line also knows the remedy.
   if (a.clusters > mesh.face_count() && subdivision_levels == 0)
     throw OptionError("cannot make " + std::to_string(a.clusters) + " vertices from the " +
                       std::to_string(mesh.face_count()) + " faces of " + a.input +
                       ": ask for fewer, or add --subdivide auto to refine the input first");
-  Topology topology = build_topology(mesh);
-  if (a.gradation == 0) {
-    prepared = prepare_surface(mesh, topology);
-    prepared_faces = mesh.face_count();
+
+  // One whole job on mesh m with density d (coarsen_mesh.cpp: clusters per component, clustering,
+  // fixes until the dual is a valid manifold, the dual), after the locality order (mesh_order.h:
+  // the output does not depend on the input's face order other than through it) and, without a
+  // gradation (which prepared the input itself), prepare_surface.
+  struct JobRun {
+    Mesh mesh;
+    Topology topology;
+    SurfacePreparation prepared;
+    size_t prepared_faces = 0;
+    CoarsenMeshResult job;
+    double order_s = 0;
+  };
+  auto run_job = [&](Mesh m, const std::vector<float>& d) {
+    JobRun run;
+    auto start = Clock::now();
+    const LocalityOrder order = reorder_for_locality(m);
+    ClusterOptions o = options;
+    o.density = to_reordered(d, order);  // coarsen_mesh weighs both the clusters and the dual with it
+    run.order_s = seconds(start);
+    run.topology = build_topology(m);
+    run.prepared = prepared;
+    run.prepared_faces = prepared_faces;
+    if (a.gradation == 0) {
+      run.prepared = prepare_surface(m, run.topology);
+      run.prepared_faces = m.face_count();
+    }
+    CoarsenMeshOptions job_options;
+    job_options.cluster = o;
+    job_options.coarsen = co;
+    job_options.max_fix_rounds = a.fix_rounds;
+    run.job = coarsen_mesh(m, run.topology, job_options);
+    run.mesh = std::move(m);
+    return run;
+  };
+  JobRun run = run_job(std::move(mesh), density);
+  // auto's fallback: where the split input's coarse mesh keeps defects, the input as it was is
+  // coarsened too and kept when it has fewer (ALSTOM_TEST4 -> 203: 23 defects split, none as given).
+  double discarded_s = 0;
+  int64_t discarded_defects = -1;  // of the job not kept, when two ran
+  const size_t split_defects = run.job.coarse.defects.size();
+  bool split_discarded = false;
+  if (auto_split && split_edges > 0 && run.job.defects_remain && unsplit.face_count() >= a.clusters) {
+    JobRun plain = run_job(std::move(unsplit), unsplit_density);
+    const JobRun& dropped = plain.job.coarse.defects.size() < split_defects ? run : plain;
+    discarded_s = dropped.order_s + dropped.job.cluster_seconds + dropped.job.fix_seconds + dropped.job.coarsen_seconds;
+    discarded_defects = int64_t(dropped.job.coarse.defects.size());
+    if (&dropped == &run) {
+      run = std::move(plain);
+      split_discarded = true;
+    }
   }
+  prepare_s += run.order_s;
+  mesh = std::move(run.mesh);
+  Topology topology = std::move(run.topology);
+  prepared = run.prepared;
+  prepared_faces = run.prepared_faces;
+  const CoarsenMeshResult job = std::move(run.job);
+  if (split_discarded) split_edges = 0;
+  if (split_discarded && !a.quiet)
+    std::fprintf(stderr,
+                 "meshcvt: note: %s: with its long edges split the coarse mesh kept %zu defects, as given %zu: "
+                 "coarsened as given\n",
+                 a.input.c_str(), split_defects, job.coarse.defects.size());
   if (prepared.split_vertices > 0 && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s: split %llu pinched vert%s (where parts of the surface touch at a point)\n",
                  a.input.c_str(), (unsigned long long)prepared.split_vertices,
@@ -275,13 +351,6 @@ void run_coarsen(const CoarsenArgs& a) {
                  "boundary loops and Euler characteristic may differ from the input's\n",
                  a.input.c_str(), (unsigned long long)topology.nonmanifold_edges,
                  topology.nonmanifold_edges == 1 ? "" : "s", topology.nonmanifold_edges == 1 ? "it" : "them");
-  // The whole job (coarsen_mesh.cpp): clusters per component, clustering, fixes until the dual is a
-  // valid manifold, the dual.
-  CoarsenMeshOptions job_options;
-  job_options.cluster = options;
-  job_options.coarsen = co;
-  job_options.max_fix_rounds = a.fix_rounds;
-  const CoarsenMeshResult job = coarsen_mesh(mesh, topology, job_options);
   const Clustering& c = job.clustering;
   const CoarsenResult& r = job.coarse;
   if (!c.device_notice.empty() && !a.quiet) std::fprintf(stderr, "meshcvt: note: %s\n", c.device_notice.c_str());
@@ -310,7 +379,9 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("collapsed_faces", collapsed + job.collapsed_faces)
         .value("subdivision_levels", subdivision_levels)
         .value("coarse_edge_length", coarse_edge).value("long_edges", long_edges)
-        .value("split_edges_ratio", a.split_edges).value("split_edges", split_edges)
+        .value("split_edges_option", a.split_edges).value("split_edges_ratio", split_discarded ? 0.0 : split_ratio)
+        .value("split_edges", split_edges).value("split_discarded", split_discarded)
+        .value("discarded_job_defects", discarded_defects)
         .value("gradation", a.gradation);
     j.begin_object("output").value("vertices", uint64_t(r.mesh.vertex_count())).value("faces", uint64_t(r.mesh.face_count()))
         .value("euler_characteristic", out_info.euler_characteristic).value("input_euler_characteristic", in_info.euler_characteristic)
@@ -361,7 +432,7 @@ void run_coarsen(const CoarsenArgs& a) {
     j.end_array();
     j.begin_object("timings_s").value("read", read_s).value("subdivide_density", prepare_s)
         .value("cluster", job.cluster_seconds).value("fix", job.fix_seconds).value("coarsen", coarsen_s)
-        .value("write", write_s).end_object();
+        .value("write", write_s).value("discarded_job", discarded_s).end_object();
     j.end_object();
     write_text_file(a.report, j.str());
   }
@@ -371,8 +442,8 @@ void run_coarsen(const CoarsenArgs& a) {
                   subdivision_levels, faces_before_split, a.gradation);
     if (split_edges > 0)
       std::printf("%s: split %llu edges longer than %.4g (the coarse edge length %.4g%s / %g) -> %zu faces\n",
-                  a.input.c_str(), (unsigned long long)split_edges, coarse_edge / a.split_edges, coarse_edge,
-                  density.empty() ? "" : " where the density is lowest", a.split_edges, mesh.face_count());
+                  a.input.c_str(), (unsigned long long)split_edges, coarse_edge / split_ratio, coarse_edge,
+                  density.empty() ? "" : " where the density is lowest", split_ratio, mesh.face_count());
     std::printf("%s: %zu faces -> %zu vertices, %zu triangles (%s, %s placement); chi %lld -> %lld, %llu boundary loops"
                 " -> %llu; %zu defects\n",
                 a.input.c_str(), mesh.face_count(), r.mesh.vertex_count(), r.mesh.face_count(), a.metric.c_str(),
@@ -404,10 +475,11 @@ const RegisterCommand reg(30, [](CLI::App& app) {
                   "auto | K (0..6): subdivide the input first, K times or (auto) until it has >= 10 faces per vertex (qem: "
                   "20, as ACVD's 10 vertices; qem's default is auto, the others' 0)");
   sub->add_option("--split-edges", a->split_edges,
-                  "R in [0, 16]: first split every input edge longer than 1/R of the coarse mesh's edge length "
-                  "(sqrt(2 area / (sqrt 3 n)); with --gradation, where the density is), so that no face is longer "
-                  "than a cluster is wide: CAD exports' long thin triangles (0 = off, the default; 1.5: "
-                  "libcgal-demo's pinion -> 130 gets Q avg 0.84 instead of 0.51)");
+                  "auto | off | R in [0, 16]: first split every input edge longer than 1/R of the coarse mesh's edge "
+                  "length (sqrt(2 area / (sqrt 3 n)); with --gradation, where the density is), so that no face is "
+                  "longer than a cluster is wide: CAD exports' long thin triangles (libcgal-demo's pinion -> 130: Q avg "
+                  "0.51 -> 0.84). auto (the default): R = 1.5 when at least one edge per cluster is that long, and "
+                  "the input as given instead where that leaves fewer defects; off = 0");
   sub->add_option("--fix-rounds", a->fix_rounds,
                   "rounds of fixing the clustering where its dual is not a manifold (default 12; 0 = report only)");
   sub->add_option("--threads", a->threads, "worker threads, 0 = all cores");

@@ -1,13 +1,19 @@
 #!/usr/bin/env bash
-# CLI test of `meshcvt coarsen --split-edges R`: a closed cylinder whose side is made of long thin
-# triangles running its whole height and whose caps are fans (a CAD export's triangulation, made here
-# in Python). Without the option the command must print the note naming the long edges; with it the
-# report must count the split edges and the refined faces, the output must stay a closed manifold of
-# n vertices with chi 2, and its triangles must be better (Q avg) than without. The split is the
-# same from run to run (same bytes). A bad ratio is exit 2 with a message naming the option.
-# usage: coarsen_split_edges.sh /path/to/meshcvt
+# CLI test of `meshcvt coarsen --split-edges auto|off|R`:
+# - a closed cylinder whose side is made of long thin triangles running its whole height and whose
+#   caps are fans (a CAD export's triangulation, made here in Python). By default (auto) its long
+#   edges are split: the report counts them and the refined faces, the output stays a closed
+#   manifold of n vertices with chi 2, and its triangles are better (Q avg) than with
+#   `--split-edges off`, which prints a note naming the long edges instead. auto gives the same
+#   bytes as `--split-edges 1.5`, run after run.
+# - auto's fallback: the elephant stretched 4x along x, with --fix-rounds 0 (so defects stay), at
+#   n = 400 has more defects split than as given: auto keeps the input as given (same bytes as
+#   `--split-edges off`), says so in a note and in the report.
+# - a bad value is exit 2 with a message naming the option, and writes nothing.
+# usage: coarsen_split_edges.sh /path/to/meshcvt /path/to/tests/data
 set -euo pipefail
 cli=$1
+data=$2
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
@@ -30,23 +36,24 @@ with open(sys.argv[1], 'w') as out:
 PY
 
 n=60
-"$cli" coarsen "$tmp/cylinder.off" -n $n -o "$tmp/plain.off" --device cpu --no-error --report "$tmp/plain.json" \
-  >/dev/null 2>"$tmp/plain.err" || fail "plain run failed: $(cat "$tmp/plain.err")"
+"$cli" coarsen "$tmp/cylinder.off" -n $n -o "$tmp/plain.off" --device cpu --no-error --split-edges off \
+  --report "$tmp/plain.json" >/dev/null 2>"$tmp/plain.err" || fail "off run failed: $(cat "$tmp/plain.err")"
 grep -q "edges are longer than the coarse mesh's edges" "$tmp/plain.err" || fail "no note about long edges: $(cat "$tmp/plain.err")"
-grep -q -- "--split-edges 1.5" "$tmp/plain.err" || fail "the note does not name the option"
-"$cli" coarsen "$tmp/cylinder.off" -n $n -o "$tmp/split.off" --device cpu --no-error --split-edges 1.5 \
-  --report "$tmp/split.json" >"$tmp/split.out" 2>"$tmp/split.err" || fail "split run failed: $(cat "$tmp/split.err")"
+grep -q -- "--split-edges auto" "$tmp/plain.err" || fail "the note does not name the option"
+"$cli" coarsen "$tmp/cylinder.off" -n $n -o "$tmp/split.off" --device cpu --no-error \
+  --report "$tmp/split.json" >"$tmp/split.out" 2>"$tmp/split.err" || fail "auto run failed: $(cat "$tmp/split.err")"
 grep -q "edges are longer" "$tmp/split.err" && fail "note printed although the edges were split"
 grep -q "split [0-9]* edges longer than" "$tmp/split.out" || fail "no split line: $(cat "$tmp/split.out")"
 "$cli" coarsen "$tmp/cylinder.off" -n $n -o "$tmp/again.off" --device cpu --no-error --split-edges 1.5 -q
-cmp -s "$tmp/split.off" "$tmp/again.off" || fail "two runs with --split-edges gave different meshes"
+cmp -s "$tmp/split.off" "$tmp/again.off" || fail "auto and --split-edges 1.5 gave different meshes"
 
 python3 - "$tmp/plain.json" "$tmp/split.json" "$tmp/split.off" $n <<'PY' || fail "report or output check failed"
 import json, sys
 plain, split = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
 n = int(sys.argv[4])
 assert plain['split_edges'] == 0 and plain['long_edges'] >= n, (plain['split_edges'], plain['long_edges'])
-assert split['split_edges'] > 0 and split['split_edges_ratio'] == 1.5
+assert split['split_edges'] > 0 and split['split_edges_ratio'] == 1.5 and split['split_edges_option'] == 'auto'
+assert not split['split_discarded'] and split['discarded_job_defects'] == -1
 assert split['faces'] > plain['faces'] == 192, (split['faces'], plain['faces'])
 for r in (plain, split):
     o = r['output']
@@ -67,11 +74,42 @@ for f in faces:
 assert all(c == 1 and (b, a) in directed for (a, b), c in directed.items()), "not a closed oriented manifold"
 PY
 
-for bad in -1 17 nan; do
+# The fallback.
+python3 - "$data/elephant.off" "$tmp/long.off" <<'PY'
+import sys
+tok = open(sys.argv[1]).read().split()
+nv, nf = int(tok[1]), int(tok[2])
+with open(sys.argv[2], 'w') as out:
+    out.write(f"OFF\n{nv} {nf} 0\n")
+    for i in range(nv):
+        x, y, z = (float(t) for t in tok[4 + 3 * i:7 + 3 * i])
+        out.write(f"{4 * x:.6f} {y:.6f} {z:.6f}\n")
+    for i in range(nf):
+        out.write(" ".join(tok[4 + 3 * nv + 4 * i:8 + 3 * nv + 4 * i]) + "\n")
+PY
+n=400
+for mode in auto off 1.5; do
+  "$cli" coarsen "$tmp/long.off" -n $n -o "$tmp/long-$mode.off" --device cpu --no-error --fix-rounds 0 \
+    --split-edges $mode --report "$tmp/long-$mode.json" >/dev/null 2>"$tmp/long-$mode.err" || fail "$mode run failed"
+done
+grep -q "coarsened as given" "$tmp/long-auto.err" || fail "no fallback note: $(cat "$tmp/long-auto.err")"
+cmp -s "$tmp/long-auto.off" "$tmp/long-off.off" || fail "the fallback did not keep the input as given"
+python3 - "$tmp/long-auto.json" "$tmp/long-off.json" "$tmp/long-1.5.json" $n <<'PY' || fail "fallback report check failed"
+import json, sys
+auto, off, split = (json.load(open(p)) for p in sys.argv[1:4])
+n = int(sys.argv[4])
+assert auto['long_edges'] >= n
+assert auto['split_discarded'] and auto['split_edges'] == 0 and auto['split_edges_ratio'] == 0
+assert auto['discarded_job_defects'] == len(split['defects']) > len(off['defects']) == len(auto['defects']) > 0
+assert auto['timings_s']['discarded_job'] > 0
+assert auto['faces'] == off['faces'] < split['faces']
+PY
+
+for bad in -1 17 nan abc ""; do
   if "$cli" coarsen "$tmp/cylinder.off" -n $n -o "$tmp/bad.off" --split-edges "$bad" 2>"$tmp/bad.err"; then
-    fail "--split-edges $bad accepted"
+    fail "--split-edges '$bad' accepted"
   fi
-  grep -q -- "--split-edges" "$tmp/bad.err" || fail "message for --split-edges $bad: $(cat "$tmp/bad.err")"
-  [ ! -e "$tmp/bad.off" ] || fail "--split-edges $bad wrote an output"
+  grep -q -- "--split-edges" "$tmp/bad.err" || fail "message for --split-edges '$bad': $(cat "$tmp/bad.err")"
+  [ ! -e "$tmp/bad.off" ] || fail "--split-edges '$bad' wrote an output"
 done
 echo "coarsen_split_edges: ok"
