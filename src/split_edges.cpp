@@ -130,8 +130,10 @@ SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std
     for (size_t f = 0; f < faces; ++f) {
       if (collapsed(&v[3 * f])) continue;  // no area: kept as it is
       const double l2 = limit2(f);
-      for (int k = 0; k < 3; ++k)
-        if (length2(p, v[3 * f + k], v[3 * f + (k + 1) % 3]) > l2) midpoint.emplace(edge_key(v[3 * f + k], v[3 * f + (k + 1) % 3]), 0);
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t a = v[3 * f + k], b = v[3 * f + (k + 1) % 3];
+        if (length2(p, a, b) > l2) midpoint.emplace(edge_key(a, b), 0);
+      }
     }
     if (midpoint.empty()) break;
     // Ends of marked edges: a face can have a marked edge only where two of its corners are such ends
