@@ -64,6 +64,7 @@ bool inside(const Mesh& m, size_t f, const double q[3]) {
 // Checks what every split must keep: each face is inside its parent and faces its way, the area,
 // the topology (chi, boundary loops, manifoldness, orientation), and no edge above `limit`.
 void check_split(const Mesh& in, const meshcvt::SplitEdgesResult& s, double limit) {
+  for (uint32_t v : s.mesh.indices) REQUIRE(v < s.mesh.vertex_count());
   const meshcvt::MeshInfo a = meshcvt::mesh_info(in, meshcvt::build_topology(in));
   const meshcvt::MeshInfo b = meshcvt::mesh_info(s.mesh, meshcvt::build_topology(s.mesh));
   CHECK(b.euler_characteristic == a.euler_characteristic);
@@ -165,6 +166,27 @@ TEST_CASE("split_long_edges: per-face limits; an edge too long for one of its fa
     }
   CHECK(longest_in_face0 > 5.0);
   CHECK(std::count(s.parent.begin(), s.parent.end(), 0u) > 1);  // split on the diagonal
+}
+
+TEST_CASE("split_long_edges: a split reaches along the longest-edge path (each face splits its own longest first)") {
+  // A, B, C in a fan around vertex 1, each one's longest edge shared with the next: A's (1-2, 2.0) is
+  // too long for A; B then needs its own longest (1-3, 3.0) split first, and C, on the other side of
+  // that, its longest (1-4, 3.99), although neither is too long for B or C themselves.
+  Mesh m;
+  m.positions = {0, 0, 0, 1, -0.8f, 0, 2, 0, 0, 1.5f, 2.6f, 0, -1.5f, 3.7f, 0};
+  const uint32_t p1 = 0, p0 = 1, p2 = 2, p3 = 3, p4 = 4;
+  m.indices = {p1, p0, p2, p1, p2, p3, p1, p3, p4};  // A, B, C
+  const meshcvt::SplitEdgesResult s = meshcvt::split_long_edges(m, 0, {1.5, 100.0, 100.0});
+  check_split(m, s, 4.0);
+  double longest_in[3] = {0, 0, 0};
+  for (size_t f = 0; f < s.mesh.face_count(); ++f)
+    for (int k = 0; k < 3; ++k)
+      longest_in[s.parent[f]] = std::max(longest_in[s.parent[f]],
+                                         edge_length(s.mesh, s.mesh.indices[3 * f + k], s.mesh.indices[3 * f + (k + 1) % 3]));
+  CHECK(longest_in[0] <= 1.5);
+  CHECK(longest_in[1] < 2.9);  // 1-3 split
+  CHECK(longest_in[2] < 3.9);  // 1-4 split
+  CHECK(meshcvt::triangle_quality(s.mesh).min_angle_deg >= 0.5 * meshcvt::triangle_quality(m).min_angle_deg);
 }
 
 TEST_CASE("split_long_edges: a non-manifold edge is split for all its faces; source_polygon follows") {
