@@ -15,8 +15,9 @@
 // propagation path); give each marked edge one midpoint vertex; replace each face by its children
 // (1, 2, 3 or 4 triangles: bisect the longest edge, then each half across its other marked edge).
 // Rounds repeat until no edge is too long; each halves the marked edges, so they end after about
-// log2(longest edge / limit) rounds. Everything is decided by edge lengths and vertex ids, in face
-// order: the output does not depend on a hash table's order or on threads.
+// log2(longest edge / limit) rounds. Everything is decided by edge lengths and vertex ids (edges
+// numbered in order of their two vertex ids, children written in face order): the same input gives
+// the same output, whatever order the closure reaches the faces in.
 #include "meshcvt/subdivide.h"
 
 #include <algorithm>
