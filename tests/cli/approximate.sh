@@ -8,9 +8,7 @@
 set -euo pipefail
 cli=$1
 data=$2
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+source "$(dirname "$0")/prologue.bash"  # $tmp, fail
 py=python3
 [ -x /usr/bin/python3 ] && py=/usr/bin/python3
 

@@ -10,9 +10,7 @@
 set -euo pipefail
 cli=$1
 data=$2
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+source "$(dirname "$0")/prologue.bash"  # $tmp, fail
 
 check_off() {  # file n chi: closed, oriented, manifold, n vertices all used, Euler characteristic chi
   python3 - "$@" <<'PY' || fail "output check failed for $1"

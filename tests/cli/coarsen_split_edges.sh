@@ -14,9 +14,7 @@
 set -euo pipefail
 cli=$1
 data=$2
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+source "$(dirname "$0")/prologue.bash"  # $tmp, fail
 
 python3 - "$tmp/cylinder.off" <<'PY'
 import math, sys

@@ -8,9 +8,7 @@
 set -euo pipefail
 cli=$1
 data=$2
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+source "$(dirname "$0")/prologue.bash"  # $tmp, fail
 
 # check NAME INFO_JSON OFF_FILE|- [PYTHON_ASSERTS]: the JSON parses; when OFF_FILE is given, every
 # count info reports equals the one measured here from the file; then the asserts run with d = the

@@ -6,9 +6,7 @@
 set -euo pipefail
 cli=$1
 data=$2
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+source "$(dirname "$0")/prologue.bash"  # $tmp, fail
 
 # Regular tetrahedron: every face equilateral (Q = 1, angles 60), every vertex of valence 3.
 cat > "$tmp/tet.off" <<'EOF'

@@ -6,9 +6,7 @@
 set -uo pipefail
 cli=$1
 data=$2
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+source "$(dirname "$0")/prologue.bash"  # $tmp, fail
 
 # expect_usage_error ARGS...: exit 2, an error line on stderr, nothing on stdout, no output file.
 expect_usage_error() {
