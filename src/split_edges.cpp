@@ -6,7 +6,7 @@
 //
 // Why: a cluster is a set of whole faces. Where a face is longer than a cluster is wide (the long
 // thin triangles of CAD exports: a cylinder's fan, a flat side of two triangles) no cluster can be
-// round, the dual gets thin triangles and relax cannot mend them (libcgal-demo's pinion -> 130:
+// round, the dual gets thin triangles and relax cannot mend them (libcgal-demo's pinion_small -> 130:
 // Q avg 0.51, 240 angles below 30 degrees). Uniform subdivision (subdivide_midpoint) refines the
 // parts that are already fine as much as the coarse ones; splitting only the long edges does not.
 //

@@ -477,7 +477,7 @@ const RegisterCommand reg(30, [](CLI::App& app) {
   sub->add_option("--split-edges", a->split_edges,
                   "auto | off | R in [0, 16]: first split every input edge longer than 1/R of the coarse mesh's edge "
                   "length (sqrt(2 area / (sqrt 3 n)); with --gradation, where the density is), so that no face is "
-                  "longer than a cluster is wide: CAD exports' long thin triangles (libcgal-demo's pinion -> 130: Q avg "
+                  "longer than a cluster is wide: CAD exports' long thin triangles (libcgal-demo's pinion_small -> 130: Q avg "
                   "0.51 -> 0.84). auto (the default): R = 1.5 when at least one edge per cluster is that long, and "
                   "the input as given instead where that leaves fewer defects; off = 0");
   sub->add_option("--fix-rounds", a->fix_rounds,
