@@ -445,4 +445,91 @@ const char* to_string(VertexPlacement p);
 /// "cluster_not_disk", "boundary_arcs", ... (the enumerator's name).
 const char* to_string(DualDefect::Kind k);
 
+/// CoarsenSurfaceOptions::subdivide: the placement's default (subdivides_by_default: `auto` for
+/// qem, no subdivision for the others), or `auto` (subdivision_levels_for with the placement's
+/// subdivision_faces_per_cluster); 0..6 are levels.
+inline constexpr int kSubdivideByPlacement = -2;
+inline constexpr int kSubdivideAuto = -1;
+/// CoarsenSurfaceOptions::split_edges: split at 1 / kAutoSplitEdgesRatio of the coarse edge length
+/// where at least one edge per cluster is longer than that length, else not at all; and coarsen
+/// the input as given instead where that leaves fewer defects. The ratio was chosen by sweeps over
+/// libcgal-demo's meshes (bench/RESULTS.md, "Coarsening: long faces": 0.5 and 0.7 gave part of
+/// the gain, 2 and 3 refine more for less).
+inline constexpr double kSplitEdgesAuto = -1;
+inline constexpr double kAutoSplitEdgesRatio = 1.5;
+
+/// The whole of `meshcvt coarsen` between reading and writing: what it does to the input before
+/// coarsen_mesh, and coarsen_mesh.
+struct CoarsenSurfaceOptions {
+  /// The job. job.cluster.clusters = n; job.cluster.density may hold a per-face density of the
+  /// input as given (face_count entries, > 0), carried to the faces made of each face; it must
+  /// be empty when gradation > 0, which makes one.
+  CoarsenMeshOptions job;
+  /// Curvature-adaptive density (curvature_density of the input's own faces, after
+  /// prepare_surface): 0 = uniform. Finite, >= 0.
+  double gradation = 0;
+  /// kSubdivideByPlacement, kSubdivideAuto, or 0..6 midpoint subdivision levels (subdivide_midpoint).
+  int subdivide = kSubdivideByPlacement;
+  /// kSplitEdgesAuto, 0 = never, or R in (0, 16]: split_long_edges at 1/R of the coarse edge length
+  /// (coarse_edge_length of the surface's weight, area x density, and n; per face where there is
+  /// a density, so the limit is smaller where clusters are) whatever the count of long edges.
+  double split_edges = kSplitEdgesAuto;
+  /// Count the edges longer than the coarse edge length when split_edges is 0 too (two passes
+  /// over the faces; 0.03-0.1 s on 4.8M faces); they are always counted otherwise.
+  bool count_long_edges = true;
+};
+
+struct CoarsenSurfaceResult {
+  /// The surface that was clustered and coarsened: the input without its collapsed faces,
+  /// subdivided, split, prepared (prepare_surface) and in locality order (reorder_for_locality);
+  /// job.clustering.labels are per face of it, and it is what the coarse mesh approximates.
+  Mesh surface;
+  Topology topology;        ///< build_topology(surface)
+  CoarsenMeshResult job;    ///< coarsen_mesh's result; job.coarse.mesh is the coarse mesh
+  uint64_t collapsed_faces = 0;      ///< faces with a repeated corner left out first
+  size_t input_faces = 0;            ///< faces of the input without them
+  unsigned subdivision_levels = 0;
+  size_t subdivided_faces = 0;       ///< faces after the subdivision (input_faces x 4^levels)
+  /// prepare_surface's changes, and the faces of the mesh it changed: the input before the
+  /// subdivision when gradation > 0 (the density needs consistent normals), the surface otherwise.
+  SurfacePreparation prepared;
+  size_t prepared_faces = 0;
+  /// The coarse edge length (where the density is 1) and the edges longer than it, of the
+  /// subdivided mesh (0 when not counted).
+  double coarse_edge_length = 0;
+  uint64_t long_edges = 0;
+  double split_ratio = 0;            ///< R the surface was split at (0: not split)
+  uint64_t split_edges = 0;          ///< edges split in the surface (0: not split)
+  /// kSplitEdgesAuto ran two jobs, the split input's and the input's as given, because the first
+  /// kept defects; split_discarded: the second was kept (it had fewer). discarded_job_defects: the
+  /// defects of the job not kept (-1 when only one job ran), discarded_seconds its time.
+  bool split_discarded = false;
+  int64_t discarded_job_defects = -1;
+  double discarded_seconds = 0;
+  /// Subdivision, density, prepare_surface, splitting and locality order, in seconds (the job's
+  /// own times are in job).
+  double prepare_seconds = 0;
+};
+
+/// Coarsens a mesh as `meshcvt coarsen` does, to exactly n = options.job.cluster.clusters vertices:
+///  1. faces with a repeated corner are left out (remove_collapsed_faces);
+///  2. with a gradation, prepare_surface and curvature_density on the input's own faces;
+///  3. subdivide_midpoint by options.subdivide (each face's density goes to its children);
+///  4. split_long_edges by options.split_edges;
+///  5. reorder_for_locality, build_topology, prepare_surface, then coarsen_mesh;
+///  6. with kSplitEdgesAuto, where the split surface's coarse mesh keeps defects, steps 5 on the
+///     unsplit mesh, and the result with fewer defects is kept (ties: the split one).
+/// What coarsen_mesh alone does not: subdivision, splitting long edges, the locality order (the
+/// output depends on the input's face order only through it).
+///
+/// Inputs: mesh (any triangle mesh, e.g. read_mesh's; taken by value, moved in where the caller
+///         has no further use), options (see CoarsenSurfaceOptions). Outputs: see
+///         CoarsenSurfaceResult; lengths in the input's units, times in seconds.
+/// Guarantees: those of coarsen_mesh, on the result's surface. Deterministic for any thread count.
+/// Throws OptionError on options out of range (gradation, subdivide, split_edges, a density of the
+/// wrong size or with a gradation) and when n is larger than the faces and nothing subdivides;
+/// Error when every face is collapsed; and what coarsen_mesh, subdivide_midpoint and
+/// split_long_edges throw.
+CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& options);
+
 }  // namespace meshcvt

@@ -1,0 +1,251 @@
+// meshcvt: the whole coarsening of a mesh as read (`meshcvt coarsen` between reading and writing):
+// the input refined where its faces are too large or too long for the clusters, then coarsen_mesh
+// (Fan et al. Section 6.1 with the topology fixes of coarsen_mesh.cpp). The refinement is
+// subdivide_midpoint (as ACVD and pyacvd subdivide a coarse input) and split_long_edges (Rivara's
+// longest-edge bisection, for CAD exports' long thin faces: a cluster is a set of whole faces, so
+// none can be round where faces are longer than a cluster is wide).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "parallel.h"
+#include "vec3.h"
+#include "meshcvt/coarsen.h"
+#include "meshcvt/density.h"
+#include "meshcvt/error.h"
+#include "meshcvt/mesh_order.h"
+#include "meshcvt/subdivide.h"
+#include "meshcvt/topology.h"
+
+namespace meshcvt {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Per fixed chunk of faces, on the worker pool: fn(first, last) -> a partial result, added in chunk
+// order, so the total does not depend on the thread count (the weight sets the split's limit).
+// (One thread for both passes cost the 4.8M bunny 0.16 s.)
+template <typename T, typename Fn>
+T sum_over_faces(WorkerPool& pool, size_t faces, const Fn& fn) {
+  constexpr size_t kChunk = size_t(1) << 16;
+  const size_t chunks = (faces + kChunk - 1) / kChunk;
+  std::vector<T> partial(chunks, T(0));
+  pool.run(chunks, [&](size_t first, size_t last, unsigned) {
+    for (size_t c = first; c < last; ++c) partial[c] = fn(c * kChunk, std::min(faces, (c + 1) * kChunk));
+  }, 2);
+  T total = 0;
+  for (T x : partial) total += x;
+  return total;
+}
+
+// The sum of area x density over the faces (density empty: 1), in double.
+double surface_weight(WorkerPool& pool, const Mesh& mesh, const std::vector<float>& density) {
+  return sum_over_faces<double>(pool, mesh.face_count(), [&](size_t first, size_t last) {
+    double weight = 0;
+    for (size_t f = first; f < last; ++f) weight += face_area(mesh, f) * (density.empty() ? 1.0 : double(density[f]));
+    return weight;
+  });
+}
+
+// Edges longer than `limit`: half the half-edges that long (an interior edge is two, a boundary
+// edge one: close enough for a count that decides whether to split and is reported).
+uint64_t edges_longer_than(WorkerPool& pool, const Mesh& mesh, double limit) {
+  const double limit2 = limit * limit;
+  const uint64_t half_edges = sum_over_faces<uint64_t>(pool, mesh.face_count(), [&](size_t first, size_t last) {
+    uint64_t count = 0;
+    for (size_t f = first; f < last; ++f) {
+      const uint32_t* t = &mesh.indices[3 * f];
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t a = t[k], b = t[(k + 1) % 3];
+        double s = 0;
+        for (int d = 0; d < 3; ++d) {
+          const double x = double(mesh.positions[3 * size_t(a) + d]) - mesh.positions[3 * size_t(b) + d];
+          s += x * x;
+        }
+        count += s > limit2;
+      }
+    }
+    return count;
+  });
+  return (half_edges + 1) / 2;
+}
+
+// One job on surface m with density d: the locality order (the output depends on the face order
+// only through it), the topology, prepare_surface unless the gradation did it on the input, and
+// coarsen_mesh.
+struct JobRun {
+  Mesh surface;
+  Topology topology;
+  SurfacePreparation prepared;
+  size_t prepared_faces = 0;
+  CoarsenMeshResult job;
+  double order_seconds = 0;
+};
+
+JobRun run_job(Mesh m, const std::vector<float>& d, const CoarsenSurfaceOptions& options, bool prepare) {
+  JobRun run;
+  const auto start = Clock::now();
+  const LocalityOrder order = reorder_for_locality(m);
+  CoarsenMeshOptions job = options.job;
+  job.cluster.density = to_reordered(d, order);  // coarsen_mesh weighs both the clusters and the dual with it
+  run.order_seconds = seconds_since(start);
+  run.topology = build_topology(m);
+  if (prepare) {
+    run.prepared = prepare_surface(m, run.topology);
+    run.prepared_faces = m.face_count();
+  }
+  run.job = coarsen_mesh(m, run.topology, job);
+  run.surface = std::move(m);
+  return run;
+}
+
+double seconds_of(const JobRun& run) {
+  return run.order_seconds + run.job.cluster_seconds + run.job.fix_seconds + run.job.coarsen_seconds;
+}
+
+}  // namespace
+
+CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& options) {
+  const uint32_t n = options.job.cluster.clusters;
+  const VertexPlacement placement = options.job.coarsen.placement;
+  // Options first, so a bad value costs no work.
+  if (!(options.gradation >= 0) || !std::isfinite(options.gradation))
+    throw OptionError("coarsen: the gradation must be a finite number >= 0, not " + std::to_string(options.gradation));
+  if (options.subdivide < kSubdivideByPlacement || options.subdivide > 6)
+    throw OptionError("coarsen: subdivide must be kSubdivideByPlacement, kSubdivideAuto or 0..6 levels, not " +
+                      std::to_string(options.subdivide));
+  const bool auto_split = options.split_edges == kSplitEdgesAuto;
+  if (!auto_split && !(options.split_edges >= 0 && options.split_edges <= 16))
+    throw OptionError("coarsen: split_edges must be kSplitEdgesAuto or a ratio within [0, 16], not " +
+                      std::to_string(options.split_edges));
+  std::vector<float> density = options.job.cluster.density;  // empty: uniform
+  if (!density.empty() && options.gradation > 0)
+    throw OptionError("coarsen: a density and a gradation were both given: the gradation makes the density");
+  if (!density.empty() && density.size() != mesh.face_count())
+    throw OptionError("coarsen: the density has " + std::to_string(density.size()) + " entries for " +
+                      std::to_string(mesh.face_count()) + " faces");
+
+  CoarsenSurfaceResult result;
+  auto t0 = Clock::now();
+  // Faces with a repeated corner (welding a sliver leaves them) have no area and no edges: left out
+  // here, as coarsen_mesh would leave them out, so that every count below is of the surface.
+  {
+    std::vector<uint32_t> kept_index;
+    result.collapsed_faces = remove_collapsed_faces(mesh, density.empty() ? nullptr : &kept_index);
+    if (result.collapsed_faces > 0 && !density.empty()) {
+      std::vector<float> kept(mesh.face_count());
+      for (size_t f = 0; f < kept_index.size(); ++f)
+        if (kept_index[f] != kNone) kept[kept_index[f]] = density[f];
+      density = std::move(kept);
+    }
+  }
+  if (mesh.face_count() == 0)
+    throw Error("coarsen: every face has a repeated corner index (no area): nothing to coarsen");
+  result.input_faces = mesh.face_count();
+
+  // The gradation's density is estimated on the input's own faces (a midpoint subdivision adds no
+  // curvature information, and its finer faces would make creases look sharper), after
+  // prepare_surface: the curvature needs consistent normals as much as the dual does.
+  result.prepared_faces = mesh.face_count();
+  if (options.gradation > 0) {
+    Topology input_topology = build_topology(mesh);
+    result.prepared = prepare_surface(mesh, input_topology);
+    density = curvature_density(mesh, input_topology, options.gradation);
+  }
+  const int subdivide = options.subdivide == kSubdivideByPlacement
+                            ? (subdivides_by_default(placement) ? kSubdivideAuto : 0)
+                            : options.subdivide;
+  result.subdivision_levels =
+      subdivide == kSubdivideAuto
+          ? subdivision_levels_for(result.input_faces, n, subdivision_faces_per_cluster(placement))
+          : unsigned(subdivide);
+  if (result.subdivision_levels > 0) {
+    mesh = subdivide_midpoint(mesh, result.subdivision_levels);
+    if (!density.empty()) {
+      // Children of face f are [f 4^k, (f + 1) 4^k).
+      std::vector<float> fine(mesh.face_count());
+      for (size_t f = 0; f < fine.size(); ++f) fine[f] = density[f >> (2 * result.subdivision_levels)];
+      density = std::move(fine);
+    }
+  }
+  result.subdivided_faces = mesh.face_count();
+
+  // Long edges: longer than the coarse mesh's edge (where the density is 1; per face below).
+  const double split_option = auto_split ? 0 : options.split_edges;
+  const bool measure = auto_split || split_option > 0 || options.count_long_edges;
+  double weight = 0;
+  if (measure && n > 0) {
+    WorkerPool pool(options.job.cluster.threads);
+    weight = surface_weight(pool, mesh, density);
+    if (weight > 0) {
+      result.coarse_edge_length = coarse_edge_length(weight, n);
+      result.long_edges = edges_longer_than(pool, mesh, result.coarse_edge_length);
+    }
+  }
+  const double ratio = auto_split ? (result.long_edges >= n && n > 0 ? kAutoSplitEdgesRatio : 0) : split_option;
+  Mesh unsplit;  // auto: the mesh before the split, for the fallback
+  std::vector<float> unsplit_density;
+  if (ratio > 0 && weight > 0) {
+    std::vector<double> face_limit;  // with a density: where clusters are smaller, so are the limits
+    if (!density.empty()) {
+      face_limit.resize(mesh.face_count());
+      for (size_t f = 0; f < mesh.face_count(); ++f)
+        face_limit[f] = coarse_edge_length(weight, n, double(density[f])) / ratio;
+    }
+    SplitEdgesResult split = split_long_edges(mesh, result.coarse_edge_length / ratio, face_limit);
+    if (split.split_edges > 0) {
+      result.split_ratio = ratio;
+      result.split_edges = split.split_edges;
+      if (auto_split) {
+        unsplit = mesh;
+        unsplit_density = density;
+      }
+      if (!density.empty()) {
+        std::vector<float> fine(split.parent.size());
+        for (size_t f = 0; f < fine.size(); ++f) fine[f] = density[split.parent[f]];
+        density = std::move(fine);
+      }
+      mesh = std::move(split.mesh);
+    }
+  }
+  result.prepare_seconds = seconds_since(t0);
+  // coarsen_mesh's own message names the numbers too; this one also knows the remedy.
+  if (n > mesh.face_count() && result.subdivision_levels == 0)
+    throw OptionError("coarsen: cannot make " + std::to_string(n) + " vertices from the " +
+                      std::to_string(mesh.face_count()) +
+                      " faces of the input: ask for fewer, or subdivide it first (--subdivide auto, kSubdivideAuto)");
+
+  const bool prepare = options.gradation == 0;
+  JobRun run = run_job(std::move(mesh), density, options, prepare);
+  // auto's fallback: where the split surface's coarse mesh keeps defects, the input as it was is
+  // coarsened too and kept when it has fewer (ALSTOM_TEST4 -> 203: 23 defects split, none as given).
+  if (auto_split && result.split_edges > 0 && run.job.defects_remain && unsplit.face_count() >= n) {
+    JobRun plain = run_job(std::move(unsplit), unsplit_density, options, prepare);
+    const bool keep_plain = plain.job.coarse.defects.size() < run.job.coarse.defects.size();
+    const JobRun& dropped = keep_plain ? run : plain;
+    result.discarded_seconds = seconds_of(dropped);
+    result.discarded_job_defects = int64_t(dropped.job.coarse.defects.size());
+    if (keep_plain) {
+      run = std::move(plain);
+      result.split_discarded = true;
+      result.split_ratio = 0;
+      result.split_edges = 0;
+    }
+  }
+  result.prepare_seconds += run.order_seconds;
+  if (prepare) {
+    result.prepared = run.prepared;
+    result.prepared_faces = run.prepared_faces;
+  }
+  result.surface = std::move(run.surface);
+  result.topology = std::move(run.topology);
+  result.job = std::move(run.job);
+  return result;
+}
+
+}  // namespace meshcvt

@@ -1,0 +1,324 @@
+// Tests for coarsen_surface (the whole of `meshcvt coarsen` as a library call): long edges split
+// first where a CAD-like triangulation has them, the fallback to the input as given, subdivision by
+// placement, a caller's density carried to the faces made of each face, collapsed faces left out,
+// the same result for any thread count, and the errors.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "meshcvt/coarsen.h"
+#include "meshcvt/error.h"
+#include "meshcvt/io.h"
+#include "meshcvt/mesh.h"
+#include "meshcvt/quality.h"
+#include "meshcvt/subdivide.h"
+#include "meshcvt/topology.h"
+#include "test_meshes.h"
+#include "vec3.h"
+
+using namespace meshcvt;
+
+namespace {
+
+// A closed cylinder as CAD exports triangulate it: k sides of two triangles each running the whole
+// height h, caps fanned from their centres. Radius 1: each side triangle is h x 2 sin(pi / k).
+Mesh cad_cylinder(uint32_t k = 48, double h = 6) {
+  Mesh m;
+  for (double z : {0.0, h})
+    for (uint32_t i = 0; i < k; ++i)
+      test::add_vertex(m, std::cos(2 * M_PI * i / k), std::sin(2 * M_PI * i / k), z);
+  const uint32_t bottom = test::add_vertex(m, 0, 0, 0), top = test::add_vertex(m, 0, 0, h);
+  for (uint32_t i = 0; i < k; ++i) {
+    const uint32_t j = (i + 1) % k;
+    test::add_triangle(m, i, j, k + j);
+    test::add_triangle(m, i, k + j, k + i);
+    test::add_triangle(m, bottom, j, i);
+    test::add_triangle(m, top, k + i, k + j);
+  }
+  return m;
+}
+
+double longest_edge(const Mesh& m) {
+  double longest = 0;
+  for (size_t f = 0; f < m.face_count(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const float* a = &m.positions[3 * size_t(m.indices[3 * f + k])];
+      const float* b = &m.positions[3 * size_t(m.indices[3 * f + (k + 1) % 3])];
+      longest = std::max(longest, std::sqrt(double(a[0] - b[0]) * (a[0] - b[0]) + double(a[1] - b[1]) * (a[1] - b[1]) +
+                                            double(a[2] - b[2]) * (a[2] - b[2])));
+    }
+  return longest;
+}
+
+CoarsenSurfaceOptions with_n(uint32_t n) {
+  CoarsenSurfaceOptions o;
+  o.job.cluster.clusters = n;
+  o.job.cluster.device = "cpu";
+  return o;
+}
+
+// A valid coarse mesh: n vertices, a closed or open manifold with the surface's chi and loops.
+void check_valid(const CoarsenSurfaceResult& r, uint32_t n) {
+  CHECK_FALSE(r.job.defects_remain);
+  CHECK(r.job.coarse.defects.empty());
+  const Mesh& coarse = r.job.coarse.mesh;
+  CHECK(coarse.vertex_count() == n);
+  const Topology t = build_topology(coarse);
+  const MeshInfo in = mesh_info(r.surface, r.topology), out = mesh_info(coarse, t);
+  CHECK(out.nonmanifold_edges == 0);
+  CHECK(out.nonmanifold_vertices == 0);
+  CHECK(out.euler_characteristic == in.euler_characteristic);
+  CHECK(out.boundary_loops == in.boundary_loops);
+}
+
+}  // namespace
+
+TEST_CASE("coarsen_surface: a CAD-like cylinder's long edges are split first, and its triangles come out better") {
+  const Mesh cylinder = cad_cylinder();
+  const uint32_t n = 60;
+  CoarsenSurfaceOptions off = with_n(n);
+  off.split_edges = 0;
+  const CoarsenSurfaceResult plain = coarsen_surface(cylinder, off);
+  const CoarsenSurfaceResult split = coarsen_surface(cylinder, with_n(n));
+
+  // Both count the same long edges (the 96 side edges and more): at least one per cluster.
+  CHECK(plain.long_edges == split.long_edges);
+  CHECK(split.long_edges >= n);
+  CHECK(plain.coarse_edge_length == doctest::Approx(split.coarse_edge_length));
+  CHECK(plain.split_edges == 0);
+  CHECK(plain.split_ratio == 0);
+  CHECK(plain.surface.face_count() == cylinder.face_count());
+  CHECK(split.split_ratio == kAutoSplitEdgesRatio);
+  CHECK(split.split_edges > 0);
+  CHECK_FALSE(split.split_discarded);
+  CHECK(split.discarded_job_defects == -1);  // one job: the split one was valid
+  // No edge of the clustered surface is longer than the limit.
+  CHECK(longest_edge(split.surface) <= split.coarse_edge_length / kAutoSplitEdgesRatio * (1 + 1e-6));
+  CHECK(longest_edge(plain.surface) > 5);
+
+  check_valid(plain, n);
+  check_valid(split, n);
+  const TriangleQuality qp = triangle_quality(plain.job.coarse.mesh), qs = triangle_quality(split.job.coarse.mesh);
+  CHECK(qs.q_avg > qp.q_avg + 0.05);
+  CHECK(qs.angles_below_30 < qp.angles_below_30);
+
+  // An explicit ratio splits at that ratio whatever the count.
+  CoarsenSurfaceOptions three = with_n(n);
+  three.split_edges = 3;
+  const CoarsenSurfaceResult finer = coarsen_surface(cylinder, three);
+  CHECK(finer.split_ratio == 3);
+  CHECK(finer.surface.face_count() > split.surface.face_count());
+  CHECK(longest_edge(finer.surface) <= finer.coarse_edge_length / 3 * (1 + 1e-6));
+}
+
+TEST_CASE("coarsen_surface: a mesh without long edges is coarsened as given, as coarsen_mesh would") {
+  const Mesh sphere = test::icosphere(3);  // 1280 faces
+  const uint32_t n = 40;
+  const CoarsenSurfaceResult r = coarsen_surface(sphere, with_n(n));
+  CHECK(r.long_edges < n);
+  CHECK(r.split_edges == 0);
+  CHECK(r.subdivision_levels == 0);
+  CHECK(r.surface.face_count() == sphere.face_count());
+  check_valid(r, n);
+  // Below 2^18 faces there is no locality order, so the surface is the input and coarsen_mesh on it
+  // gives the same mesh.
+  CoarsenMeshOptions job = with_n(n).job;
+  const CoarsenMeshResult direct = coarsen_mesh(sphere, build_topology(sphere), job);
+  CHECK(direct.coarse.mesh.positions == r.job.coarse.mesh.positions);
+  CHECK(direct.coarse.mesh.indices == r.job.coarse.mesh.indices);
+}
+
+TEST_CASE("coarsen_surface: where the split surface keeps defects, the input as given is kept when it has fewer") {
+  // The elephant stretched 4x along x, without fix rounds (so defects stay): at n = 400 the split
+  // surface's coarse mesh has more defects than the input's as given.
+  Mesh stretched = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
+  for (size_t v = 0; v < stretched.vertex_count(); ++v) stretched.positions[3 * v] *= 4;
+  const uint32_t n = 400;
+  CoarsenSurfaceOptions o = with_n(n);
+  o.job.max_fix_rounds = 0;
+  CoarsenSurfaceOptions off = o, forced = o;
+  off.split_edges = 0;
+  forced.split_edges = kAutoSplitEdgesRatio;
+  const CoarsenSurfaceResult chosen = coarsen_surface(stretched, o);
+  const CoarsenSurfaceResult as_given = coarsen_surface(stretched, off);
+  const CoarsenSurfaceResult split = coarsen_surface(stretched, forced);
+  REQUIRE(chosen.long_edges >= n);
+  REQUIRE(split.job.coarse.defects.size() > as_given.job.coarse.defects.size());
+  CHECK(chosen.split_discarded);
+  CHECK(chosen.split_edges == 0);
+  CHECK(chosen.split_ratio == 0);
+  CHECK(chosen.discarded_job_defects == int64_t(split.job.coarse.defects.size()));
+  CHECK(chosen.discarded_seconds > 0);
+  CHECK(chosen.surface.face_count() == stretched.face_count());
+  CHECK(chosen.job.coarse.mesh.positions == as_given.job.coarse.mesh.positions);
+  CHECK(chosen.job.coarse.mesh.indices == as_given.job.coarse.mesh.indices);
+}
+
+TEST_CASE("coarsen_surface: subdivision by placement, auto and levels") {
+  const Mesh sphere = test::icosphere(1);  // 80 faces
+  const uint32_t n = 20;
+  CoarsenSurfaceOptions o = with_n(n);
+  o.split_edges = 0;
+  SUBCASE("projected takes the input as given by default") {
+    const CoarsenSurfaceResult r = coarsen_surface(sphere, o);
+    CHECK(r.subdivision_levels == 0);
+    CHECK(r.subdivided_faces == 80);
+    check_valid(r, n);
+  }
+  SUBCASE("qem subdivides to 20 faces per cluster by default: 80 x 4^2 >= 400") {
+    o.job.coarsen.placement = VertexPlacement::qem;
+    const CoarsenSurfaceResult r = coarsen_surface(sphere, o);
+    CHECK(r.subdivision_levels == subdivision_levels_for(80, n, subdivision_faces_per_cluster(VertexPlacement::qem)));
+    CHECK(r.subdivision_levels == 2);
+    CHECK(r.surface.face_count() == 1280);
+    check_valid(r, n);
+  }
+  SUBCASE("auto with projected: 10 faces per cluster, 80 x 4 >= 200") {
+    o.subdivide = kSubdivideAuto;
+    CHECK(coarsen_surface(sphere, o).subdivision_levels == 1);
+  }
+  SUBCASE("one level") {
+    o.subdivide = 1;
+    const CoarsenSurfaceResult r = coarsen_surface(sphere, o);
+    CHECK(r.subdivision_levels == 1);
+    CHECK(r.surface.face_count() == 320);
+    check_valid(r, n);
+  }
+}
+
+TEST_CASE("coarsen_surface: a caller's density sets the split's limits and follows the faces split from each face") {
+  // Density 4 on the top cap, 1 elsewhere: the top cap's faces are split at half the length
+  // (coarse_edge_length goes as density^-1/2), and the clustering weighs each piece by its face's
+  // density.
+  const Mesh cylinder = cad_cylinder();
+  const uint32_t n = 80;
+  CoarsenSurfaceOptions o = with_n(n);
+  std::vector<float>& density = o.job.cluster.density;
+  for (size_t f = 0; f < cylinder.face_count(); ++f) {
+    bool top = true;
+    for (int k = 0; k < 3; ++k) top = top && cylinder.positions[3 * size_t(cylinder.indices[3 * f + k]) + 2] > 5.9f;
+    density.push_back(top ? 4.0f : 1.0f);
+  }
+  const CoarsenSurfaceResult r = coarsen_surface(cylinder, o);
+  REQUIRE(r.split_edges > 0);
+  check_valid(r, n);
+  // The longest edge on each cap.
+  auto cap_edges = [](const Mesh& m, bool top) {
+    Mesh cap;
+    cap.positions = m.positions;
+    for (size_t f = 0; f < m.face_count(); ++f) {
+      bool on = true;
+      for (int k = 0; k < 3; ++k) {
+        const float z = m.positions[3 * size_t(m.indices[3 * f + k]) + 2];
+        on = on && (top ? z > 5.999f : z < 0.001f);
+      }
+      if (on) cap.indices.insert(cap.indices.end(), &m.indices[3 * f], &m.indices[3 * f] + 3);
+    }
+    return longest_edge(cap);
+  };
+  // The surface's weight is area x density, 4 on the top cap.
+  double weight = 0;
+  for (size_t f = 0; f < cylinder.face_count(); ++f) weight += face_area(cylinder, f) * density[f];
+  const double limit = coarse_edge_length(weight, n) / kAutoSplitEdgesRatio;
+  CHECK(r.coarse_edge_length == doctest::Approx(coarse_edge_length(weight, n)));
+  CHECK(cap_edges(r.surface, true) <= limit / 2 * (1 + 1e-6));
+  CHECK(cap_edges(r.surface, false) > limit / 2 * 1.2);
+  CHECK(cap_edges(r.surface, false) <= limit * (1 + 1e-6));
+
+  // The job is coarsen_mesh on the split surface with each piece's parent's density (below 2^18
+  // faces there is no locality order).
+  std::vector<double> face_limit;
+  for (float d : density) face_limit.push_back(coarse_edge_length(weight, n, d) / kAutoSplitEdgesRatio);
+  const SplitEdgesResult split = split_long_edges(cylinder, limit, face_limit);
+  CHECK(split.mesh.indices == r.surface.indices);
+  CoarsenMeshOptions job = o.job;
+  job.cluster.density.clear();
+  for (uint32_t parent : split.parent) job.cluster.density.push_back(density[parent]);
+  const CoarsenMeshResult direct = coarsen_mesh(split.mesh, build_topology(split.mesh), job);
+  CHECK(direct.clustering.labels == r.job.clustering.labels);
+  CHECK(direct.coarse.mesh.positions == r.job.coarse.mesh.positions);
+  // and not the result of a uniform density on it.
+  job.cluster.density.clear();
+  const CoarsenMeshResult uniform = coarsen_mesh(split.mesh, build_topology(split.mesh), job);
+  CHECK(uniform.clustering.labels != r.job.clustering.labels);
+}
+
+TEST_CASE("coarsen_surface: collapsed faces are left out first, with their density entries") {
+  // Seven collapsed faces put before the sphere's, with densities of their own: the result is
+  // that of the sphere alone with its faces' densities.
+  const Mesh sphere = test::icosphere(3);
+  const Mesh appended = test::with_collapsed_faces(sphere, 7, 97);
+  Mesh with = sphere;
+  with.indices.assign(appended.indices.begin() + 3 * sphere.face_count(), appended.indices.end());
+  with.indices.insert(with.indices.end(), sphere.indices.begin(), sphere.indices.end());
+  REQUIRE(with.face_count() == sphere.face_count() + 7);
+  CoarsenSurfaceOptions alone = with_n(40), o = with_n(40);
+  for (size_t f = 0; f < sphere.face_count(); ++f) alone.job.cluster.density.push_back(1.0f + float(f % 5));
+  o.job.cluster.density.assign(7, 100.0f);
+  o.job.cluster.density.insert(o.job.cluster.density.end(), alone.job.cluster.density.begin(),
+                               alone.job.cluster.density.end());
+  const CoarsenSurfaceResult r = coarsen_surface(with, o), expected = coarsen_surface(sphere, alone);
+  CHECK(r.collapsed_faces == 7);
+  CHECK(r.input_faces == sphere.face_count());
+  CHECK(r.surface.indices == sphere.indices);
+  check_valid(r, 40);
+  CHECK(r.job.coarse.mesh.positions == expected.job.coarse.mesh.positions);
+  CHECK(r.job.coarse.mesh.indices == expected.job.coarse.mesh.indices);
+}
+
+TEST_CASE("coarsen_surface: same result for any thread count") {
+  const Mesh cylinder = cad_cylinder();
+  CoarsenSurfaceOptions one = with_n(60), three = with_n(60);
+  one.job.cluster.threads = one.job.coarsen.threads = 1;
+  three.job.cluster.threads = three.job.coarsen.threads = 3;
+  const CoarsenSurfaceResult a = coarsen_surface(cylinder, one), b = coarsen_surface(cylinder, three);
+  CHECK(a.split_edges == b.split_edges);
+  CHECK(a.coarse_edge_length == b.coarse_edge_length);
+  CHECK(a.job.coarse.mesh.positions == b.job.coarse.mesh.positions);
+  CHECK(a.job.coarse.mesh.indices == b.job.coarse.mesh.indices);
+}
+
+TEST_CASE("coarsen_surface: errors") {
+  const Mesh sphere = test::icosphere(1);  // 80 faces
+  auto fails = [&](CoarsenSurfaceOptions o, const std::string& part) {
+    try {
+      coarsen_surface(sphere, o);
+      FAIL("no error for " << part);
+    } catch (const OptionError& e) {
+      CHECK_MESSAGE(std::string(e.what()).find(part) != std::string::npos, e.what());
+    }
+  };
+  CoarsenSurfaceOptions o = with_n(20);
+  o.gradation = -1;
+  fails(o, "gradation");
+  o = with_n(20);
+  o.gradation = NAN;
+  fails(o, "gradation");
+  o = with_n(20);
+  o.subdivide = 7;
+  fails(o, "subdivide");
+  o = with_n(20);
+  o.split_edges = 17;
+  fails(o, "split_edges");
+  o = with_n(20);
+  o.split_edges = -0.5;
+  fails(o, "split_edges");
+  o = with_n(20);
+  o.job.cluster.density.assign(79, 1.0f);
+  fails(o, "79 entries for 80 faces");
+  o = with_n(20);
+  o.job.cluster.density.assign(80, 1.0f);
+  o.gradation = 1;
+  fails(o, "both");
+  o = with_n(100);
+  o.split_edges = 0;
+  fails(o, "100 vertices from the 80 faces");
+
+  Mesh collapsed;
+  for (int i = 0; i < 3; ++i) test::add_vertex(collapsed, i, 0, 0);
+  test::add_triangle(collapsed, 0, 0, 1);
+  CHECK_THROWS_AS(coarsen_surface(collapsed, with_n(4)), Error);
+}
