@@ -1,8 +1,7 @@
 // meshcvt CLI: `meshcvt coarsen` — clusters a mesh (CVT or CCVT) and builds the coarse mesh from
 // the clusters (Fan et al. Section 6.1), then measures it (Table 1 columns, distance to the input).
-// Without --subdivide, `qem` refines a coarse input as ACVD does (subdivides_by_default in
-// meshcvt/coarsen.h); the other placements take the input as given.
-#include <algorithm>
+// Between reading and writing, the work is the library's coarsen_surface (subdivision, long edges
+// split, the job); this file parses, prints notes, measures and reports.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -13,16 +12,11 @@
 
 #include "cli/command.h"
 #include "cli/json.h"
-#include "parallel.h"
-#include "vec3.h"
 #include "meshcvt/cluster.h"
 #include "meshcvt/coarsen.h"
-#include "meshcvt/density.h"
 #include "meshcvt/error.h"
 #include "meshcvt/io.h"
-#include "meshcvt/mesh_order.h"
 #include "meshcvt/quality.h"
-#include "meshcvt/subdivide.h"
 #include "meshcvt/topology.h"
 
 namespace meshcvt::cli {
@@ -43,13 +37,10 @@ struct CoarsenArgs {
   std::string split_edges = "auto";  ///< --split-edges auto|R (parse_split_edges)
 };
 
-// --split-edges: "auto" -> kSplitAuto, "off" -> 0, a number R in [0, 16] -> R (0 = off); else OptionError.
-constexpr double kSplitAuto = -1;
-// What auto splits with: edges longer than 1 / 1.5 of the coarse edge (bench/RESULTS.md, "Coarsening:
-// long faces": 0.5 and 0.7 gave part of the gain, 2 and 3 refine more for less).
-constexpr double kAutoSplitRatio = 1.5;
+// --split-edges: "auto" -> kSplitEdgesAuto, "off" -> 0, a number R in [0, 16] -> R (0 = off); else
+// OptionError.
 double parse_split_edges(const std::string& s) {
-  if (s == "auto") return kSplitAuto;
+  if (s == "auto") return kSplitEdgesAuto;
   if (s == "off") return 0;
   char* end = nullptr;
   const double r = std::strtod(s.c_str(), &end);
@@ -58,63 +49,13 @@ double parse_split_edges(const std::string& s) {
   return r;
 }
 
-// --subdivide: "" -> 0 levels, or kSubdivideAuto where the placement subdivides by default;
-// "0".."6" -> that many, "auto" -> kSubdivideAuto; else OptionError.
-constexpr int kSubdivideAuto = -1;
-int parse_subdivide(const std::string& s, VertexPlacement placement) {
-  if (s.empty()) return subdivides_by_default(placement) ? kSubdivideAuto : 0;
+// --subdivide: "" -> kSubdivideByPlacement, "auto" -> kSubdivideAuto, "0".."6" -> that many; else
+// OptionError.
+int parse_subdivide(const std::string& s) {
+  if (s.empty()) return kSubdivideByPlacement;
   if (s == "auto") return kSubdivideAuto;
   if (s.size() == 1 && s[0] >= '0' && s[0] <= '6') return s[0] - '0';
   throw OptionError("--subdivide must be auto or a number of levels 0..6, not '" + s + "'");
-}
-
-// Per fixed chunk of faces, on the worker pool: fn(first, last) -> a partial result, added in chunk
-// order, so the total does not depend on the thread count (the weight sets --split-edges' limit).
-// (One thread for both passes cost the 4.8M bunny 0.16 s.)
-template <typename T, typename Fn>
-T sum_over_faces(size_t faces, unsigned threads, const Fn& fn) {
-  constexpr size_t kChunk = size_t(1) << 16;
-  const size_t chunks = (faces + kChunk - 1) / kChunk;
-  std::vector<T> partial(chunks, T(0));
-  WorkerPool pool(threads);
-  pool.run(chunks, [&](size_t first, size_t last, unsigned) {
-    for (size_t c = first; c < last; ++c) partial[c] = fn(c * kChunk, std::min(faces, (c + 1) * kChunk));
-  }, 2);
-  T total = 0;
-  for (T x : partial) total += x;
-  return total;
-}
-
-// The sum of area x density over the faces (density empty: 1), in double.
-double surface_weight(const Mesh& mesh, const std::vector<float>& density, unsigned threads) {
-  return sum_over_faces<double>(mesh.face_count(), threads, [&](size_t first, size_t last) {
-    double weight = 0;
-    for (size_t f = first; f < last; ++f) weight += face_area(mesh, f) * (density.empty() ? 1.0 : double(density[f]));
-    return weight;
-  });
-}
-
-// Edges longer than `limit`, for a note: half the half-edges that long (an interior edge is two, a
-// boundary edge one: close enough).
-uint64_t edges_longer_than(const Mesh& mesh, double limit, unsigned threads) {
-  const double limit2 = limit * limit;
-  const uint64_t half_edges = sum_over_faces<uint64_t>(mesh.face_count(), threads, [&](size_t first, size_t last) {
-    uint64_t count = 0;
-    for (size_t f = first; f < last; ++f) {
-      const uint32_t* t = &mesh.indices[3 * f];
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t a = t[k], b = t[(k + 1) % 3];
-        double s = 0;
-        for (int d = 0; d < 3; ++d) {
-          const double x = double(mesh.positions[3 * size_t(a) + d]) - mesh.positions[3 * size_t(b) + d];
-          s += x * x;
-        }
-        count += s > limit2;
-      }
-    }
-    return count;
-  });
-  return (half_edges + 1) / 2;
 }
 
 // "cluster_not_disk 2, double_border 1": how many of each kind.
@@ -156,20 +97,22 @@ std::string describe_fixes(const CoarsenMeshResult& job) {
 void run_coarsen(const CoarsenArgs& a) {
   using Clock = std::chrono::steady_clock;
   auto seconds = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
-  ClusterOptions options;
+  // Checked before reading, so a bad value costs no I/O.
+  CoarsenSurfaceOptions so;
+  ClusterOptions& options = so.job.cluster;
   options.clusters = a.clusters;
   options.metric = parse_metric(a.metric);
   if (options.metric == Metric::l21)
     throw OptionError("coarsen builds an isotropic mesh: use --metric cvt or ccvt (l21 is for `meshcvt approximate`)");
   options.threads = a.threads;
   options.device = a.device;
-  // Checked before reading, so a bad value costs no I/O; options.density is set once the mesh is read.
-  CoarsenOptions co;
+  CoarsenOptions& co = so.job.coarsen;
   co.placement = parse_vertex_placement(a.placement);
-  int subdivide = parse_subdivide(a.subdivide, co.placement);
-  const double split_option = parse_split_edges(a.split_edges);
+  so.subdivide = parse_subdivide(a.subdivide);
+  so.split_edges = parse_split_edges(a.split_edges);
   if (!(a.gradation >= 0) || !std::isfinite(a.gradation))
     throw OptionError("--gradation must be a finite number >= 0, not " + std::to_string(a.gradation));
+  so.gradation = a.gradation;
   co.threads = a.threads;
   co.flip_edges = !a.no_flips;
   co.relax_passes = a.relax_passes;
@@ -181,167 +124,47 @@ void run_coarsen(const CoarsenArgs& a) {
   if (!(a.fit_min_angle >= 0 && a.fit_min_angle <= 60))
     throw OptionError("--fit-min-angle must be within [0, 60] degrees, not " + std::to_string(a.fit_min_angle));
   co.fit_min_angle_deg = a.fit_min_angle;
+  so.job.max_fix_rounds = a.fix_rounds;
+  // The count of long edges is for the note and the report; auto and R count them anyway.
+  so.count_long_edges = !a.quiet || !a.report.empty();
 
   prepare_allocator(a.input);
   auto t0 = Clock::now();
   ReadOptions ro;
   ro.weld = !a.no_weld;
-  Mesh mesh = read_mesh_noted(a.input, ro, a.quiet);
+  Mesh input = read_mesh_noted(a.input, ro, a.quiet);
   double read_s = seconds(t0);
-  // Faces with a repeated corner (welding a sliver leaves them) have no area and no edges: left
-  // out here as coarsen_mesh would leave them out, so that the faces and chi printed are those of
-  // the surface coarsened.
-  const uint64_t collapsed = remove_collapsed_faces(mesh);
-  if (mesh.face_count() == 0)
+  // Faces with a repeated corner are left out here already (coarsen_surface would), so that the
+  // messages about them name the file.
+  const uint64_t collapsed = remove_collapsed_faces(input);
+  if (input.face_count() == 0)
     throw FileError(a.input, "every face has a repeated corner index (no area): nothing to coarsen");
   if (collapsed > 0 && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s: left out %llu face%s with a repeated corner (no area)\n", a.input.c_str(),
                  (unsigned long long)collapsed, collapsed == 1 ? "" : "s");
-  // --subdivide, --gradation (as ACVD): the density is estimated on the input's own faces (a
-  // midpoint subdivision adds no curvature information, and its finer faces would make creases look
-  // sharper) and each subdivided face inherits its parent's: children of f are [f 4^k, (f+1) 4^k).
-  t0 = Clock::now();
-  const size_t input_faces = mesh.face_count();
-  const unsigned subdivision_levels =
-      subdivide == kSubdivideAuto
-          ? subdivision_levels_for(input_faces, a.clusters, subdivision_faces_per_cluster(co.placement))
-          : unsigned(subdivide);
-  std::vector<float> density;  // empty: uniform
-  // Pinched vertices split and faces flipped so that each part is consistently oriented
-  // (prepare_surface): the curvature behind the density needs consistent normals as much as the
-  // dual does.
-  SurfacePreparation prepared;
-  size_t prepared_faces = mesh.face_count();  // of the mesh prepare_surface changed (before or after subdividing)
-  if (a.gradation > 0) {
-    Topology input_topology = build_topology(mesh);
-    prepared = prepare_surface(mesh, input_topology);
-    density = curvature_density(mesh, input_topology, a.gradation);
-  }
-  if (subdivision_levels > 0) {
-    mesh = subdivide_midpoint(mesh, subdivision_levels);
-    if (!density.empty()) {
-      std::vector<float> fine(mesh.face_count());
-      for (size_t f = 0; f < fine.size(); ++f) fine[f] = density[f >> (2 * subdivision_levels)];
-      density = std::move(fine);
-    }
-  }
-  // --split-edges: input edges longer than 1/R of the coarse mesh's edge length are split first, so
-  // that no face is longer than a cluster is wide. auto: R = kAutoSplitRatio where at least one edge
-  // per cluster is that long (on libcgal-demo's meshes at faces / 10 and / 40, 39 of the 45 such
-  // runs gained Q avg and no defect; three gained defects, hence the fallback below:
-  // bench/RESULTS.md, "Coarsening: long faces"). The count is also reported.
-  const bool measure_edges = split_option != 0 || !a.quiet || !a.report.empty();
-  const double weight = measure_edges ? surface_weight(mesh, density, a.threads) : 0;
-  const double coarse_edge = weight > 0 ? coarse_edge_length(weight, a.clusters) : 0;
-  const uint64_t long_edges = coarse_edge > 0 ? edges_longer_than(mesh, coarse_edge, a.threads) : 0;
-  const bool auto_split = split_option == kSplitAuto;
-  const double split_ratio = !auto_split ? split_option : long_edges >= a.clusters ? kAutoSplitRatio : 0;
-  const size_t faces_before_split = mesh.face_count();
-  uint64_t split_edges = 0;
-  Mesh unsplit;  // auto: the input as it was before the split, for the fallback
-  std::vector<float> unsplit_density;
-  if (split_ratio > 0 && weight > 0) {
-    std::vector<double> face_limit;  // with a density: where clusters are smaller, so are the limits
-    if (!density.empty())
-      for (size_t f = 0; f < mesh.face_count(); ++f)
-        face_limit.push_back(coarse_edge_length(weight, a.clusters, double(density[f])) / split_ratio);
-    SplitEdgesResult split = split_long_edges(mesh, coarse_edge / split_ratio, face_limit);
-    split_edges = split.split_edges;
-    if (split_edges > 0) {
-      if (auto_split) {
-        unsplit = mesh;
-        unsplit_density = density;
-      }
-      if (!density.empty()) {
-        std::vector<float> fine(split.parent.size());
-        for (size_t f = 0; f < fine.size(); ++f) fine[f] = density[split.parent[f]];
-        density = std::move(fine);
-      }
-      mesh = std::move(split.mesh);
-    }
-  }
-  if (split_option == 0 && long_edges >= a.clusters && !a.quiet)
+
+  CoarsenSurfaceResult result = coarsen_surface(std::move(input), so);
+  const Mesh& mesh = result.surface;
+  const Topology& topology = result.topology;
+  const CoarsenMeshResult& job = result.job;
+  if (so.split_edges == 0 && result.long_edges >= a.clusters && !a.quiet)
     std::fprintf(stderr,
                  "meshcvt: note: %s: %llu edges are longer than the coarse mesh's edges (%.4g): faces that long "
                  "make thin clusters and thin triangles; --split-edges auto (the default) splits them first\n",
-                 a.input.c_str(), (unsigned long long)long_edges, coarse_edge);
-  double prepare_s = seconds(t0);
-  // The library's message names the numbers; the command line also knows the remedy.
-  if (a.clusters > mesh.face_count() && subdivision_levels == 0)
-    throw OptionError("cannot make " + std::to_string(a.clusters) + " vertices from the " +
-                      std::to_string(mesh.face_count()) + " faces of " + a.input +
-                      ": ask for fewer, or add --subdivide auto to refine the input first");
-
-  // One whole job on mesh m with density d (coarsen_mesh.cpp: clusters per component, clustering,
-  // fixes until the dual is a valid manifold, the dual), after the locality order (mesh_order.h:
-  // the output does not depend on the input's face order other than through it) and, without a
-  // gradation (which prepared the input itself), prepare_surface.
-  struct JobRun {
-    Mesh mesh;
-    Topology topology;
-    SurfacePreparation prepared;
-    size_t prepared_faces = 0;
-    CoarsenMeshResult job;
-    double order_s = 0;
-  };
-  auto run_job = [&](Mesh m, const std::vector<float>& d) {
-    JobRun run;
-    auto start = Clock::now();
-    const LocalityOrder order = reorder_for_locality(m);
-    ClusterOptions o = options;
-    o.density = to_reordered(d, order);  // coarsen_mesh weighs both the clusters and the dual with it
-    run.order_s = seconds(start);
-    run.topology = build_topology(m);
-    run.prepared = prepared;
-    run.prepared_faces = prepared_faces;
-    if (a.gradation == 0) {
-      run.prepared = prepare_surface(m, run.topology);
-      run.prepared_faces = m.face_count();
-    }
-    CoarsenMeshOptions job_options;
-    job_options.cluster = o;
-    job_options.coarsen = co;
-    job_options.max_fix_rounds = a.fix_rounds;
-    run.job = coarsen_mesh(m, run.topology, job_options);
-    run.mesh = std::move(m);
-    return run;
-  };
-  JobRun run = run_job(std::move(mesh), density);
-  // auto's fallback: where the split input's coarse mesh keeps defects, the input as it was is
-  // coarsened too and kept when it has fewer (ALSTOM_TEST4 -> 203: 23 defects split, none as given).
-  double discarded_s = 0;
-  int64_t discarded_defects = -1;  // of the job not kept, when two ran
-  const size_t split_defects = run.job.coarse.defects.size();
-  bool split_discarded = false;
-  if (auto_split && split_edges > 0 && run.job.defects_remain && unsplit.face_count() >= a.clusters) {
-    JobRun plain = run_job(std::move(unsplit), unsplit_density);
-    const JobRun& dropped = plain.job.coarse.defects.size() < split_defects ? run : plain;
-    discarded_s = dropped.order_s + dropped.job.cluster_seconds + dropped.job.fix_seconds + dropped.job.coarsen_seconds;
-    discarded_defects = int64_t(dropped.job.coarse.defects.size());
-    if (&dropped == &run) {
-      run = std::move(plain);
-      split_discarded = true;
-    }
-  }
-  prepare_s += run.order_s;
-  mesh = std::move(run.mesh);
-  Topology topology = std::move(run.topology);
-  prepared = run.prepared;
-  prepared_faces = run.prepared_faces;
-  const CoarsenMeshResult job = std::move(run.job);
-  if (split_discarded) split_edges = 0;
-  if (split_discarded && !a.quiet)
+                 a.input.c_str(), (unsigned long long)result.long_edges, result.coarse_edge_length);
+  if (result.split_discarded && !a.quiet)
     std::fprintf(stderr,
-                 "meshcvt: note: %s: with its long edges split the coarse mesh kept %zu defects, as given %zu: "
+                 "meshcvt: note: %s: with its long edges split the coarse mesh kept %lld defects, as given %zu: "
                  "coarsened as given\n",
-                 a.input.c_str(), split_defects, job.coarse.defects.size());
+                 a.input.c_str(), (long long)result.discarded_job_defects, job.coarse.defects.size());
+  const SurfacePreparation& prepared = result.prepared;
   if (prepared.split_vertices > 0 && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s: split %llu pinched vert%s (where parts of the surface touch at a point)\n",
                  a.input.c_str(), (unsigned long long)prepared.split_vertices,
                  prepared.split_vertices == 1 ? "ex" : "ices");
   if (prepared.flipped_faces > 0 && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s: flipped %llu of %zu faces so that each part is consistently oriented\n",
-                 a.input.c_str(), (unsigned long long)prepared.flipped_faces, prepared_faces);
+                 a.input.c_str(), (unsigned long long)prepared.flipped_faces, result.prepared_faces);
   // The dual of a clustering is a manifold: an edge of three faces or more has no place in it (the
   // clustering sees no link across it), and the output's boundary loops and chi follow the surface
   // cut open there (assimp-testmodels' 3DSMaxExport.STL, 16 such edges: 0 boundary loops -> 6).
@@ -374,14 +197,14 @@ void run_coarsen(const CoarsenArgs& a) {
     j.value("input", a.input).value("faces", uint64_t(mesh.face_count())).value("clusters", a.clusters)
         .value("metric", a.metric).value("placement", a.placement).value("device", c.device)
         .value("iterations", c.iterations).value("converged", c.converged);
-    j.value("input_faces", uint64_t(input_faces)).value("split_vertices", prepared.split_vertices + job.split_vertices)
+    j.value("input_faces", uint64_t(result.input_faces)).value("split_vertices", prepared.split_vertices + job.split_vertices)
         .value("reoriented_faces", prepared.flipped_faces + job.reoriented_faces)
-        .value("collapsed_faces", collapsed + job.collapsed_faces)
-        .value("subdivision_levels", subdivision_levels)
-        .value("coarse_edge_length", coarse_edge).value("long_edges", long_edges)
-        .value("split_edges_option", a.split_edges).value("split_edges_ratio", split_discarded ? 0.0 : split_ratio)
-        .value("split_edges", split_edges).value("split_discarded", split_discarded)
-        .value("discarded_job_defects", discarded_defects)
+        .value("collapsed_faces", collapsed + result.collapsed_faces + job.collapsed_faces)
+        .value("subdivision_levels", result.subdivision_levels)
+        .value("coarse_edge_length", result.coarse_edge_length).value("long_edges", result.long_edges)
+        .value("split_edges_option", a.split_edges).value("split_edges_ratio", result.split_ratio)
+        .value("split_edges", result.split_edges).value("split_discarded", result.split_discarded)
+        .value("discarded_job_defects", result.discarded_job_defects)
         .value("gradation", a.gradation);
     j.begin_object("output").value("vertices", uint64_t(r.mesh.vertex_count())).value("faces", uint64_t(r.mesh.face_count()))
         .value("euler_characteristic", out_info.euler_characteristic).value("input_euler_characteristic", in_info.euler_characteristic)
@@ -430,20 +253,21 @@ void run_coarsen(const CoarsenArgs& a) {
     j.begin_array("component_clusters");
     for (uint32_t k : job.allocation.clusters) j.item(k);
     j.end_array();
-    j.begin_object("timings_s").value("read", read_s).value("subdivide_density", prepare_s)
+    j.begin_object("timings_s").value("read", read_s).value("subdivide_density", result.prepare_seconds)
         .value("cluster", job.cluster_seconds).value("fix", job.fix_seconds).value("coarsen", coarsen_s)
-        .value("write", write_s).value("discarded_job", discarded_s).end_object();
+        .value("write", write_s).value("discarded_job", result.discarded_seconds).end_object();
     j.end_object();
     write_text_file(a.report, j.str());
   }
   if (!a.quiet) {
-    if (subdivision_levels > 0 || a.gradation > 0)
-      std::printf("%s: %zu faces, subdivided %u times -> %zu faces; gradation %g\n", a.input.c_str(), input_faces,
-                  subdivision_levels, faces_before_split, a.gradation);
-    if (split_edges > 0)
+    if (result.subdivision_levels > 0 || a.gradation > 0)
+      std::printf("%s: %zu faces, subdivided %u times -> %zu faces; gradation %g\n", a.input.c_str(), result.input_faces,
+                  result.subdivision_levels, result.subdivided_faces, a.gradation);
+    if (result.split_edges > 0)
       std::printf("%s: split %llu edges longer than %.4g (the coarse edge length %.4g%s / %g) -> %zu faces\n",
-                  a.input.c_str(), (unsigned long long)split_edges, coarse_edge / split_ratio, coarse_edge,
-                  density.empty() ? "" : " where the density is lowest", split_ratio, mesh.face_count());
+                  a.input.c_str(), (unsigned long long)result.split_edges, result.coarse_edge_length / result.split_ratio,
+                  result.coarse_edge_length, a.gradation > 0 ? " where the density is lowest" : "", result.split_ratio,
+                  mesh.face_count());
     std::printf("%s: %zu faces -> %zu vertices, %zu triangles (%s, %s placement); chi %lld -> %lld, %llu boundary loops"
                 " -> %llu; %zu defects\n",
                 a.input.c_str(), mesh.face_count(), r.mesh.vertex_count(), r.mesh.face_count(), a.metric.c_str(),
