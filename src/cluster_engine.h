@@ -37,6 +37,8 @@ struct ClusterProblem {
   uint32_t clusters = 0;
   std::vector<float> point;   ///< 3 per face: centroid (cvt, ccvt) or unit normal (l21)
   std::vector<float> weight;  ///< per face: rho_k * area, normalized units
+  /// per face: the area, normalized units; only with a density (else empty: weight is the area)
+  std::vector<float> area;
   double fixed_scale = 1;     ///< fixed = round_half_away(value * fixed_scale); |every sum| < 2^62
   float origin[3] = {0, 0, 0};
   float extent = 1;           ///< input = origin + extent * normalized

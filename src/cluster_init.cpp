@@ -126,10 +126,14 @@ struct FaceNodes {
   const uint32_t* subset = nullptr;  // node i = face subset[i]; null: node i = face i
 
   double weight(uint32_t node) const { return problem->weight[face(node)]; }
-  // dims values: p, then (dims 6) the centroid in normalized coordinates
+  // dims values: p, then (dims 6) the centroid in normalized coordinates, or (dims 4) area / w
   void mean(uint32_t node, int dims, double* out) const {
     const uint32_t f = face(node);
     for (int c = 0; c < 3; ++c) out[c] = double(problem->point[3 * size_t(f) + c]);
+    if (dims == 4) {
+      const double w = problem->weight[f];
+      out[3] = w > 0 ? double(problem->area[f]) / w : 0.0;
+    }
     if (dims == 6)
       for (int c = 0; c < 3; ++c) {
         double x = 0;
@@ -137,11 +141,14 @@ struct FaceNodes {
         out[3 + c] = (x / 3 - problem->origin[c]) / problem->extent;
       }
   }
-  // dims values: w p, then (dims 6) w * centroid in normalized coordinates
+  // dims values: w p, then (dims 6) w * centroid in normalized coordinates, or (dims 4) the area
   void sum(uint32_t node, int dims, double* out) const {
     mean(node, dims, out);
     const double w = problem->weight[face(node)];
-    for (int c = 0; c < dims; ++c) out[c] *= w;
+    for (int c = 0; c < 3; ++c) out[c] *= w;
+    if (dims == 6)
+      for (int c = 3; c < 6; ++c) out[c] *= w;
+    if (dims == 4) out[3] = double(problem->area[face(node)]);
   }
   uint32_t face(uint32_t node) const { return subset ? subset[node] : node; }
 };
@@ -176,6 +183,18 @@ constexpr double kL21PositionWeight = 0.01;
 // no division; later levels divide the stored sums here rather than keep an array of means, 24
 // bytes per face at the peak of the initialization). dims 3; with dims 6 (l21) the second triple
 // is the mean centroid and adds kL21PositionWeight times the same cost in positions.
+// With a density rho (cvt, ccvt; ClusterProblem::area is then filled), F is multiplied by
+// sqrt(rho) of the merged node (its weight over its area), and the graph carries each node's area
+// as a fourth sum (dims 4). F alone does not change when every weight in a region is scaled by the
+// same factor, so the initial clusters ignored a density that is even within a region, and the
+// local iterations after them got only part of the way: 38 / 62 clusters on the rho = 1 / 16
+// halves of a grid (n = 100), where an optimal CVT has 20 / 80 (Gersho: cell area ~ rho^-1/2).
+// Merging while F sqrt(rho), about area x sqrt(rho) for compact nodes, is the smallest evens out
+// exactly that: 18 / 82, and a lower final energy (bench/RESULTS.md, "Coarsening: gradation and
+// subdivision"). A uniform density leaves every cost as it was (factor 1), and without a density
+// nothing changes at all.
+double density_factor(double weight, double area) { return area > 0 ? std::sqrt(weight / area) : 1.0; }
+
 float contraction_cost(const DualGraph& g, uint32_t i, uint32_t j) {
   double wi = g.node_weight(i), wj = g.node_weight(j);
   if (!(wi > 0) || !(wj > 0)) return 0.0f;  // weightless faces merge for free
@@ -193,6 +212,7 @@ float contraction_cost(const DualGraph& g, uint32_t i, uint32_t j) {
     double d2 = squared(0);
     if (g.dims == 6) d2 += kL21PositionWeight * squared(3);
     double w = wi + wj;
+    if (g.dims == 4) return float(d2 / (wi * wj * (w * w)) * density_factor(w, si[3] + sj[3]));
     return float(d2 / (wi * wj * (w * w)));
   }
   double zi[6] = {}, zj[6] = {};  // (zeroed: GCC cannot see that dims entries get written)
@@ -206,6 +226,7 @@ float contraction_cost(const DualGraph& g, uint32_t i, uint32_t j) {
   double d2 = squared(0);
   if (g.dims == 6) d2 += kL21PositionWeight * squared(3);
   double w = wi + wj;
+  if (g.dims == 4) return float(wi * wj * d2 / (w * w) * density_factor(w, zi[3] * wi + zj[3] * wj));
   return float(wi * wj * d2 / (w * w));
 }
 
@@ -428,7 +449,7 @@ DualGraph face_graph(const ClusterProblem& problem, const Mesh& mesh, const Topo
   const uint32_t nf = subset ? count : problem.face_count;
   DualGraph g;
   g.nodes = nf;
-  g.dims = problem.metric == Metric::l21 ? 6 : 3;
+  g.dims = problem.metric == Metric::l21 ? 6 : problem.area.empty() ? 3 : 4;
   g.faces = FaceNodes{&problem, &mesh, subset};
   // At most 3 per face (1.5 on a closed manifold mesh): the unused tail is given back below, and
   // its pages were never touched.
@@ -486,7 +507,7 @@ std::vector<uint32_t> contract_levels(DualGraph& g, const std::vector<uint32_t>&
       uint32_t wanted = g.nodes - target;
       // Balanced levels (see kBalancedRoundFraction; dims 3: cvt and ccvt): rounds of at most that
       // share of the nodes.
-      if (g.dims == 3 && !part && target <= kBalancedLevelsNodesPerCluster * uint64_t(clusters))
+      if (g.dims != 6 && !part && target <= kBalancedLevelsNodesPerCluster * uint64_t(clusters))
         wanted = std::min(wanted, std::max<uint32_t>(1, uint32_t(kBalancedRoundFraction * g.nodes)));
       relabels.push_back(contract_round(g, wanted, pool, scratch));
       // The big early relabelings are folded into the first one at once (one pass over the faces

@@ -53,6 +53,7 @@ ClusterProblem make_cluster_problem(const Mesh& mesh, const ClusterOptions& opti
 
   pr.point.resize(3 * nf);
   pr.weight.resize(nf);
+  if (!options.density.empty() && pr.metric != Metric::l21) pr.area.resize(nf);
   if (pr.metric == Metric::ccvt) {
     pr.normalized_positions.resize(3 * nv);
     for_ranges(nv, [&](size_t first, size_t last, unsigned) {
@@ -75,6 +76,7 @@ ClusterProblem make_cluster_problem(const Mesh& mesh, const ClusterOptions& opti
       double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
       double rho = options.density.empty() ? 1.0 : double(options.density[f]);
       pr.weight[f] = float(0.5 * len * rho);
+      if (!pr.area.empty()) pr.area[f] = float(0.5 * len);
       for (int c = 0; c < 3; ++c) {
         if (pr.metric == Metric::l21)
           pr.point[3 * f + c] = len > 0 ? float(n[c] / len) : 0.0f;
