@@ -505,7 +505,7 @@ std::vector<uint32_t> contract_levels(DualGraph& g, const std::vector<uint32_t>&
         throw OptionError("cannot make " + std::to_string(clusters) + " connected clusters: the face graph has more components");
       }
       uint32_t wanted = g.nodes - target;
-      // Balanced levels (see kBalancedRoundFraction; dims 3: cvt and ccvt): rounds of at most that
+      // Balanced levels (see kBalancedRoundFraction; dims 3 or 4: cvt and ccvt): rounds of at most that
       // share of the nodes.
       if (g.dims != 6 && !part && target <= kBalancedLevelsNodesPerCluster * uint64_t(clusters))
         wanted = std::min(wanted, std::max<uint32_t>(1, uint32_t(kBalancedRoundFraction * g.nodes)));
