@@ -274,12 +274,17 @@ SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std
   return out;
 }
 
-double coarse_edge_length(double weight, uint32_t clusters, double density) {
-  if (!(weight >= 0) || !std::isfinite(weight) || clusters == 0 || !(density > 0) || !std::isfinite(density))
-    throw OptionError("coarse_edge_length: needs a finite weight >= 0, clusters > 0 and a finite density > 0");
+double coarse_edge_length(double sqrt_density_area, uint32_t clusters, double density) {
+  if (!(sqrt_density_area >= 0) || !std::isfinite(sqrt_density_area) || clusters == 0 || !(density > 0) ||
+      !std::isfinite(density))
+    throw OptionError("coarse_edge_length: needs a finite weighted area >= 0, clusters > 0 and a finite density > 0");
   // n vertices of a closed mesh of equilateral triangles make 2n triangles of area (sqrt 3 / 4) l^2
-  // each; a cluster of weight W / n covers (W / n) / density of area.
-  return std::sqrt(2.0 * weight / (std::sqrt(3.0) * double(clusters) * density));
+  // each, so a cluster covers (sqrt 3 / 2) l^2. An optimal CVT's cells cover A(rho) = C rho^-1/2
+  // (Gersho), and they add up to n: C = S / n with S the integral of sqrt(rho). (With equal
+  // weights per cluster instead, area ~ 1 / rho, the limit where rho is low came out several times
+  // too long under --gradation, and blade -> 1622 was not split at all.)
+  const double cluster_area = sqrt_density_area / (double(clusters) * std::sqrt(density));
+  return std::sqrt(2.0 * cluster_area / std::sqrt(3.0));
 }
 
 }  // namespace meshcvt

@@ -190,8 +190,8 @@ TEST_CASE("coarsen_surface: subdivision by placement, auto and levels") {
 }
 
 TEST_CASE("coarsen_surface: a caller's density sets the split's limits and follows the faces split from each face") {
-  // Density 4 on the top cap, 1 elsewhere: the top cap's faces are split at half the length
-  // (coarse_edge_length goes as density^-1/2), and the clustering weighs each piece by its face's
+  // Density 4 on the top cap, 1 elsewhere: the top cap's faces are split at 1 / sqrt 2 of the length
+  // (coarse_edge_length goes as density^-1/4), and the clustering weighs each piece by its face's
   // density.
   const Mesh cylinder = cad_cylinder();
   const uint32_t n = 80;
@@ -219,19 +219,19 @@ TEST_CASE("coarsen_surface: a caller's density sets the split's limits and follo
     }
     return longest_edge(cap);
   };
-  // The surface's weight is area x density, 4 on the top cap.
-  double weight = 0;
-  for (size_t f = 0; f < cylinder.face_count(); ++f) weight += face_area(cylinder, f) * density[f];
-  const double limit = coarse_edge_length(weight, n) / kAutoSplitEdgesRatio;
-  CHECK(r.coarse_edge_length == doctest::Approx(coarse_edge_length(weight, n)));
-  CHECK(cap_edges(r.surface, true) <= limit / 2 * (1 + 1e-6));
-  CHECK(cap_edges(r.surface, false) > limit / 2 * 1.2);
+  // The area weighted by sqrt(density), 2 on the top cap.
+  double area = 0;
+  for (size_t f = 0; f < cylinder.face_count(); ++f) area += face_area(cylinder, f) * std::sqrt(density[f]);
+  const double limit = coarse_edge_length(area, n) / kAutoSplitEdgesRatio;
+  CHECK(r.coarse_edge_length == doctest::Approx(coarse_edge_length(area, n)));
+  CHECK(cap_edges(r.surface, true) <= limit / std::sqrt(2.0) * (1 + 1e-6));
+  CHECK(cap_edges(r.surface, false) > limit / std::sqrt(2.0) * 1.1);
   CHECK(cap_edges(r.surface, false) <= limit * (1 + 1e-6));
 
   // The job is coarsen_mesh on the split surface with each piece's parent's density (below 2^18
   // faces there is no locality order).
   std::vector<double> face_limit;
-  for (float d : density) face_limit.push_back(coarse_edge_length(weight, n, d) / kAutoSplitEdgesRatio);
+  for (float d : density) face_limit.push_back(coarse_edge_length(area, n, d) / kAutoSplitEdgesRatio);
   const SplitEdgesResult split = split_long_edges(cylinder, limit, face_limit);
   CHECK(split.mesh.indices == r.surface.indices);
   CoarsenMeshOptions job = o.job;

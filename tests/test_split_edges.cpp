@@ -223,11 +223,17 @@ TEST_CASE("split_long_edges: the same input gives the same output; bad limits an
   CHECK_THROWS_AS(meshcvt::split_long_edges(bad, 1), meshcvt::OptionError);
 }
 
-TEST_CASE("coarse_edge_length: equilateral triangles of n vertices over the weight") {
+TEST_CASE("coarse_edge_length: equilateral triangles of n vertices, cells as an optimal CVT's") {
   // A closed mesh of n vertices has 2n triangles: each (sqrt 3 / 4) l^2.
   const double l = meshcvt::coarse_edge_length(100.0, 50);
   CHECK(2 * 50 * std::sqrt(3.0) / 4 * l * l == doctest::Approx(100.0));
-  CHECK(meshcvt::coarse_edge_length(100.0, 50, 4.0) == doctest::Approx(0.5 * l));  // 4x density: half the edge
+  // 4x density: clusters of half the area (an optimal CVT's cells go as density^-1/2)
+  CHECK(meshcvt::coarse_edge_length(100.0, 50, 4.0) == doctest::Approx(l / std::sqrt(2.0)));
+  // Half of an area of 100 at density 1, half at 4: S = 50 + 50 sqrt(4) = 150, and the cells there
+  // add up to the n clusters.
+  auto cell = [](double edge) { return std::sqrt(3.0) / 2 * edge * edge; };
+  const double at1 = meshcvt::coarse_edge_length(150.0, 50, 1.0), at4 = meshcvt::coarse_edge_length(150.0, 50, 4.0);
+  CHECK(50 / cell(at1) + 50 / cell(at4) == doctest::Approx(50.0));
   CHECK_THROWS_AS(meshcvt::coarse_edge_length(100.0, 0), meshcvt::OptionError);
   CHECK_THROWS_AS(meshcvt::coarse_edge_length(-1.0, 5), meshcvt::OptionError);
   CHECK_THROWS_AS(meshcvt::coarse_edge_length(1.0, 5, 0.0), meshcvt::OptionError);

@@ -471,8 +471,8 @@ struct CoarsenSurfaceOptions {
   /// kSubdivideByPlacement, kSubdivideAuto, or 0..6 midpoint subdivision levels (subdivide_midpoint).
   int subdivide = kSubdivideByPlacement;
   /// kSplitEdgesAuto, 0 = never, or R in (0, 16]: split_long_edges at 1/R of the coarse edge length
-  /// (coarse_edge_length of the surface's weight, area x density, and n; per face where there is
-  /// a density, so the limit is smaller where clusters are) whatever the count of long edges.
+  /// (coarse_edge_length of the surface and n, at each face's density where there is one, so the
+  /// limit is smaller where clusters are) whatever the count of long edges.
   double split_edges = kSplitEdgesAuto;
   /// Count the edges longer than the coarse edge length when split_edges is 0 too (two passes
   /// over the faces; 0.03-0.1 s on 4.8M faces); they are always counted otherwise.
@@ -494,8 +494,8 @@ struct CoarsenSurfaceResult {
   /// subdivision when gradation > 0 (the density needs consistent normals), the surface otherwise.
   SurfacePreparation prepared;
   size_t prepared_faces = 0;
-  /// The coarse edge length (where the density is 1) and the edges longer than it, of the
-  /// subdivided mesh (0 when not counted).
+  /// The coarse edge length where the density is 1 (coarse_edge_length), and the edges longer than
+  /// it where they are (at their face's density) in the subdivided mesh (0 when not counted).
   double coarse_edge_length = 0;
   uint64_t long_edges = 0;
   double split_ratio = 0;            ///< R the surface was split at (0: not split)

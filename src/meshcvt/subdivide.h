@@ -67,9 +67,11 @@ struct SplitEdgesResult {
 SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std::vector<double>& face_max_length = {});
 
 /// The edge length of a coarse mesh of `clusters` vertices made of equilateral triangles, closed,
-/// over a surface of total weight `weight` (area x density), where the density is `density`:
-/// sqrt(2 weight / (sqrt 3 clusters density)). In the units of the surface (a length).
-/// Throws OptionError unless weight is finite and >= 0, clusters > 0 and density finite and > 0.
-double coarse_edge_length(double weight, uint32_t clusters, double density = 1.0);
+/// where the density is `density`, when its clusters are those of an optimal CVT of the surface:
+/// cells of area (S / clusters) density^-1/2 (Gersho's law: area ~ rho^-1/2), so the length is
+/// sqrt(2 S / (sqrt 3 clusters)) density^-1/4. S = sqrt_density_area, the integral of sqrt(rho)
+/// over the surface (its area when the density is 1 everywhere). In the units of the surface.
+/// Throws OptionError unless S is finite and >= 0, clusters > 0 and density finite and > 0.
+double coarse_edge_length(double sqrt_density_area, uint32_t clusters, double density = 1.0);
 
 }  // namespace meshcvt
