@@ -17,6 +17,7 @@
 
 #include "cluster_engine.h"
 #include "meshcvt/cluster.h"
+#include "meshcvt/density.h"
 #include "meshcvt/device.h"
 #include "meshcvt/error.h"
 #include "meshcvt/io.h"
@@ -208,26 +209,33 @@ TEST_CASE("gpu engine: cluster() with device \"gpu\" equals device \"cpu\" end t
   gpu_device();
   const uint64_t messages_before = vk::validation_message_count();
   Mesh elephant = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
+  // --gradation's density: face weights of 1 to 256 (and the initialization weighs its merges by it).
+  const std::vector<float> graded = curvature_density(elephant, build_topology(elephant), 1.0);
   struct Case {
     const Mesh* mesh;
     Metric metric;
     uint32_t clusters;
     TopologyMode mode;
+    const std::vector<float>* density = nullptr;
   };
   Mesh walls = test::grid_with_wall(20);
   for (const Case& k : {Case{&elephant, Metric::cvt, 300, TopologyMode::preserving},
                         Case{&elephant, Metric::l21, 40, TopologyMode::paper},  // repair rounds run
-                        Case{&walls, Metric::ccvt, 30, TopologyMode::paper}}) {
+                        Case{&walls, Metric::ccvt, 30, TopologyMode::paper},
+                        Case{&elephant, Metric::cvt, 250, TopologyMode::preserving, &graded},
+                        Case{&elephant, Metric::ccvt, 120, TopologyMode::preserving, &graded}}) {
     ClusterOptions o;
     o.clusters = k.clusters;
     o.metric = k.metric;
     o.topology = k.mode;
+    if (k.density) o.density = *k.density;
     o.device = "cpu";
     Clustering cpu = cluster(*k.mesh, o);
     o.device = "gpu";
     Clustering gpu = cluster(*k.mesh, o);
     CAPTURE(std::string(to_string(k.metric)));
     CAPTURE(k.clusters);
+    CAPTURE(k.density != nullptr);
     CHECK(gpu.device != cpu.device);
     CHECK(gpu.labels == cpu.labels);
     CHECK(gpu.generators == cpu.generators);
