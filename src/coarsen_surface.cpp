@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -88,6 +89,7 @@ uint64_t edges_longer_than(WorkerPool& pool, const Mesh& mesh, double length, co
 // coarsen_mesh.
 struct JobRun {
   Mesh surface;
+  LocalityOrder order;  // surface face i is face order.face_of[i] of the mesh given to run_job
   Topology topology;
   SurfacePreparation prepared;
   size_t prepared_faces = 0;
@@ -98,9 +100,9 @@ struct JobRun {
 JobRun run_job(Mesh m, const std::vector<float>& d, const CoarsenSurfaceOptions& options, bool prepare) {
   JobRun run;
   const auto start = Clock::now();
-  const LocalityOrder order = reorder_for_locality(m);
+  run.order = reorder_for_locality(m);
   CoarsenMeshOptions job = options.job;
-  job.cluster.density = to_reordered(d, order);  // coarsen_mesh weighs both the clusters and the dual with it
+  job.cluster.density = to_reordered(d, run.order);  // coarsen_mesh weighs both the clusters and the dual with it
   run.order_seconds = seconds_since(start);
   run.topology = build_topology(m);
   if (prepare) {
@@ -114,6 +116,48 @@ JobRun run_job(Mesh m, const std::vector<float>& d, const CoarsenSurfaceOptions&
 
 double seconds_of(const JobRun& run) {
   return run.order_seconds + run.job.cluster_seconds + run.job.fix_seconds + run.job.coarsen_seconds;
+}
+
+// Per-face values of a split mesh from those of the faces they came from (empty stays empty).
+std::vector<float> inherited(const std::vector<float>& values, const std::vector<uint32_t>& parent) {
+  if (values.empty()) return {};
+  std::vector<float> out(parent.size());
+  for (size_t f = 0; f < out.size(); ++f) out[f] = values[parent[f]];
+  return out;
+}
+
+// The components of a job's surface that hold a cluster a defect names, as faces of the mesh the
+// surface was split from (parent: split face -> face of that mesh). A split keeps components (the
+// pieces of two faces that share an edge share its pieces), so the marked faces are whole
+// components of that mesh too.
+struct BrokenComponents {
+  std::vector<uint8_t> faces;  // 1 for each face of the unsplit mesh in such a component
+  size_t faces_marked = 0;
+  uint32_t components = 0;
+};
+
+BrokenComponents broken_components(const JobRun& run, const std::vector<uint32_t>& parent, size_t unsplit_faces) {
+  const std::vector<uint32_t>& labels = run.job.clustering.labels;
+  const Topology& topology = run.topology;
+  const uint32_t clusters = uint32_t(run.job.coarse.mesh.vertex_count());
+  std::vector<uint32_t> component_of(clusters, kNone);
+  for (size_t f = 0; f < labels.size(); ++f)
+    if (labels[f] < clusters) component_of[labels[f]] = topology.face_component[f];
+  std::vector<uint8_t> broken(topology.component_count, 0);
+  for (const DualDefect& d : run.job.coarse.defects)
+    for (uint32_t id : {d.cluster, d.other, d.third})
+      if (id < clusters && component_of[id] != kNone) broken[component_of[id]] = 1;
+  BrokenComponents out;
+  out.faces.assign(unsplit_faces, 0);
+  for (uint8_t b : broken) out.components += b;
+  for (size_t f = 0; f < labels.size(); ++f) {
+    if (!broken[topology.face_component[f]]) continue;
+    const size_t split_face = run.order.identity() ? f : run.order.face_of[f];
+    uint8_t& mark = out.faces[parent[split_face]];
+    out.faces_marked += !mark;
+    mark = 1;
+  }
+  return out;
 }
 
 }  // namespace
@@ -195,15 +239,16 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
     }
   }
   const double ratio = auto_split ? (result.long_edges >= n && n > 0 ? kAutoSplitEdgesRatio : 0) : split_option;
-  Mesh unsplit;  // auto: the mesh before the split, for the fallback
+  // auto: the mesh before the split, its density, the split's limits and the parents of the split
+  // faces, for the fallbacks below.
+  Mesh unsplit;
   std::vector<float> unsplit_density;
+  std::vector<double> face_limit;  // per face of the unsplit mesh
+  std::vector<uint32_t> split_parent;
   if (ratio > 0 && result.coarse_edge_length > 0) {
-    std::vector<double> face_limit;  // with a density: where clusters are smaller, so are the limits
-    if (!density.empty()) {
-      face_limit.resize(mesh.face_count());
-      for (size_t f = 0; f < mesh.face_count(); ++f)
-        face_limit[f] = edge_length_at(result.coarse_edge_length, density, f) / ratio;
-    }
+    face_limit.resize(mesh.face_count());  // with a density: where clusters are smaller, so are the limits
+    for (size_t f = 0; f < mesh.face_count(); ++f)
+      face_limit[f] = edge_length_at(result.coarse_edge_length, density, f) / ratio;
     SplitEdgesResult split = split_long_edges(mesh, result.coarse_edge_length / ratio, face_limit);
     if (split.split_edges > 0) {
       result.split_ratio = ratio;
@@ -211,12 +256,9 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
       if (auto_split) {
         unsplit = mesh;
         unsplit_density = density;
+        split_parent = split.parent;
       }
-      if (!density.empty()) {
-        std::vector<float> fine(split.parent.size());
-        for (size_t f = 0; f < fine.size(); ++f) fine[f] = density[split.parent[f]];
-        density = std::move(fine);
-      }
+      density = inherited(density, split.parent);
       mesh = std::move(split.mesh);
     }
   }
@@ -229,20 +271,51 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
 
   const bool prepare = options.gradation == 0;
   JobRun run = run_job(std::move(mesh), density, options, prepare);
-  // auto's fallback: where the split surface's coarse mesh keeps defects, the input as it was is
-  // coarsened too and kept when it has fewer (ALSTOM_TEST4 -> 203: 23 defects split, none as given).
+  // auto's fallbacks, where the split surface's coarse mesh keeps defects: first the split without
+  // the components that have them, then the input as it was; the job with the fewest defects is
+  // kept (ties: the more split one). A component narrower than a cluster (ALSTOM_TEST4's strip of
+  // 34 faces, all on its boundary, at -> 203) has a valid coarse mesh as given, found from its own
+  // faces, and none split; its other components gain from the split.
   if (auto_split && result.split_edges > 0 && run.job.defects_remain && unsplit.face_count() >= n) {
-    JobRun plain = run_job(std::move(unsplit), unsplit_density, options, prepare);
-    const bool keep_plain = plain.job.coarse.defects.size() < run.job.coarse.defects.size();
-    const JobRun& dropped = keep_plain ? run : plain;
-    result.discarded_seconds = seconds_of(dropped);
-    result.discarded_job_defects = int64_t(dropped.job.coarse.defects.size());
-    if (keep_plain) {
-      run = std::move(plain);
+    result.jobs.push_back({CoarsenSurfaceJob::split, run.job.coarse.defects.size(), seconds_of(run), true});
+    const BrokenComponents broken = broken_components(run, split_parent, unsplit.face_count());
+    auto keep_if_better = [&](JobRun&& other, CoarsenSurfaceJob::Surface surface) {
+      const bool better = other.job.coarse.defects.size() < run.job.coarse.defects.size();
+      result.jobs.push_back({surface, other.job.coarse.defects.size(), seconds_of(other), better});
+      if (!better) return false;
+      for (size_t i = 0; i + 1 < result.jobs.size(); ++i) result.jobs[i].kept = false;
+      run = std::move(other);
+      return true;
+    };
+    if (broken.faces_marked > 0 && broken.faces_marked < unsplit.face_count()) {
+      // Unreachable limits leave the broken components' faces as they are (a component shares no
+      // edge with another, so no neighbour's split reaches in).
+      std::vector<double> partial_limit = face_limit;
+      for (size_t f = 0; f < partial_limit.size(); ++f)
+        if (broken.faces[f]) partial_limit[f] = std::numeric_limits<double>::max();
+      SplitEdgesResult partial = split_long_edges(unsplit, 1.0, partial_limit);
+      if (partial.split_edges > 0 && partial.mesh.face_count() >= n) {
+        const uint64_t partial_edges = partial.split_edges;
+        if (keep_if_better(run_job(std::move(partial.mesh), inherited(unsplit_density, partial.parent), options, prepare),
+                           CoarsenSurfaceJob::partly_split)) {
+          result.split_edges = partial_edges;
+          result.unsplit_components = broken.components;
+        }
+      }
+    }
+    if (run.job.defects_remain &&
+        keep_if_better(run_job(std::move(unsplit), unsplit_density, options, prepare), CoarsenSurfaceJob::as_given)) {
       result.split_discarded = true;
       result.split_ratio = 0;
       result.split_edges = 0;
     }
+    for (const CoarsenSurfaceJob& job : result.jobs)
+      if (!job.kept) {
+        result.discarded_seconds += job.seconds;
+        result.discarded_job_defects = result.discarded_job_defects < 0
+                                           ? int64_t(job.defects)
+                                           : std::min(result.discarded_job_defects, int64_t(job.defects));
+      }
   }
   result.prepare_seconds += run.order_seconds;
   if (prepare) {
@@ -253,6 +326,15 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
   result.topology = std::move(run.topology);
   result.job = std::move(run.job);
   return result;
+}
+
+const char* to_string(CoarsenSurfaceJob::Surface s) {
+  switch (s) {
+    case CoarsenSurfaceJob::split: return "split";
+    case CoarsenSurfaceJob::partly_split: return "partly_split";
+    case CoarsenSurfaceJob::as_given: return "as_given";
+  }
+  return "?";
 }
 
 }  // namespace meshcvt

@@ -41,6 +41,21 @@ Mesh cad_cylinder(uint32_t k = 48, double h = 6) {
   return m;
 }
 
+// A flat strip of q quads, each len x width (two triangles), along x from x = 3: every vertex is on
+// its boundary.
+Mesh strip(uint32_t q, double len, double width) {
+  Mesh m;
+  for (uint32_t i = 0; i <= q; ++i) {
+    test::add_vertex(m, 3 + i * len, 0, 0);
+    test::add_vertex(m, 3 + i * len, width, 0);
+  }
+  for (uint32_t i = 0; i < q; ++i) {
+    test::add_triangle(m, 2 * i, 2 * i + 2, 2 * i + 3);
+    test::add_triangle(m, 2 * i, 2 * i + 3, 2 * i + 1);
+  }
+  return m;
+}
+
 double longest_edge(const Mesh& m) {
   double longest = 0;
   for (size_t f = 0; f < m.face_count(); ++f)
@@ -95,6 +110,7 @@ TEST_CASE("coarsen_surface: a CAD-like cylinder's long edges are split first, an
   CHECK(split.split_edges > 0);
   CHECK_FALSE(split.split_discarded);
   CHECK(split.discarded_job_defects == -1);  // one job: the split one was valid
+  CHECK(split.jobs.empty());
   // No edge of the clustered surface is longer than the limit.
   CHECK(longest_edge(split.surface) <= split.coarse_edge_length / kAutoSplitEdgesRatio * (1 + 1e-6));
   CHECK(longest_edge(plain.surface) > 5);
@@ -148,6 +164,12 @@ TEST_CASE("coarsen_surface: where the split surface keeps defects, the input as 
   REQUIRE(chosen.long_edges >= n);
   REQUIRE(split.job.coarse.defects.size() > as_given.job.coarse.defects.size());
   CHECK(chosen.split_discarded);
+  // One component, broken split: no partly split job, the one as given kept.
+  REQUIRE(chosen.jobs.size() == 2);
+  CHECK(chosen.jobs[0].surface == CoarsenSurfaceJob::split);
+  CHECK(chosen.jobs[1].surface == CoarsenSurfaceJob::as_given);
+  CHECK(chosen.jobs[1].kept);
+  CHECK(chosen.unsplit_components == 0);
   CHECK(chosen.split_edges == 0);
   CHECK(chosen.split_ratio == 0);
   CHECK(chosen.discarded_job_defects == int64_t(split.job.coarse.defects.size()));
@@ -155,6 +177,44 @@ TEST_CASE("coarsen_surface: where the split surface keeps defects, the input as 
   CHECK(chosen.surface.face_count() == stretched.face_count());
   CHECK(chosen.job.coarse.mesh.positions == as_given.job.coarse.mesh.positions);
   CHECK(chosen.job.coarse.mesh.indices == as_given.job.coarse.mesh.indices);
+}
+
+TEST_CASE("coarsen_surface: a component that keeps defects split is left as given, the others split") {
+  // The CAD cylinder and a strip 0.5 wide of 10 quads 2 long. At n = 60 the strip gets 11 clusters
+  // each wider than it: split, its clusters all meet both long sides (boundary_arcs); as given, its
+  // own triangles make a valid strip. The cylinder needs the split.
+  const Mesh both = test::combine(cad_cylinder(), strip(10, 2, 0.5), 0);
+  const uint32_t n = 60;
+  const CoarsenSurfaceResult r = coarsen_surface(both, with_n(n));
+  REQUIRE(r.jobs.size() == 2);
+  CHECK(r.jobs[0].surface == CoarsenSurfaceJob::split);
+  CHECK(r.jobs[0].defects > 0);
+  CHECK_FALSE(r.jobs[0].kept);
+  CHECK(r.jobs[1].surface == CoarsenSurfaceJob::partly_split);
+  CHECK(r.jobs[1].defects == 0);
+  CHECK(r.jobs[1].kept);
+  CHECK(r.unsplit_components == 1);
+  CHECK_FALSE(r.split_discarded);
+  CHECK(r.discarded_job_defects == int64_t(r.jobs[0].defects));
+  CHECK(r.split_edges > 0);
+  check_valid(r, n);
+  // The strip's 20 triangles are in the surface as they were (z = 0, x >= 3), the cylinder split.
+  size_t strip_faces = 0;
+  for (size_t f = 0; f < r.surface.face_count(); ++f) {
+    bool on_strip = true;
+    for (int k = 0; k < 3; ++k) {
+      const float* p = &r.surface.positions[3 * size_t(r.surface.indices[3 * f + k])];
+      on_strip = on_strip && p[0] >= 3 && p[2] == 0;
+    }
+    strip_faces += on_strip;
+  }
+  CHECK(strip_faces == 20);
+  CHECK(r.surface.face_count() > both.face_count() + 1000);
+  // Better than coarsening it all as given.
+  CoarsenSurfaceOptions off = with_n(n);
+  off.split_edges = 0;
+  const CoarsenSurfaceResult as_given = coarsen_surface(both, off);
+  CHECK(triangle_quality(r.job.coarse.mesh).q_avg > triangle_quality(as_given.job.coarse.mesh).q_avg + 0.05);
 }
 
 TEST_CASE("coarsen_surface: subdivision by placement, auto and levels") {

@@ -154,9 +154,15 @@ void run_coarsen(const CoarsenArgs& a) {
                  a.input.c_str(), (unsigned long long)result.long_edges, result.coarse_edge_length);
   if (result.split_discarded && !a.quiet)
     std::fprintf(stderr,
-                 "meshcvt: note: %s: with its long edges split the coarse mesh kept %lld defects, as given %zu: "
+                 "meshcvt: note: %s: with its long edges split the coarse mesh kept %zu defects, as given %zu: "
                  "coarsened as given\n",
-                 a.input.c_str(), (long long)result.discarded_job_defects, job.coarse.defects.size());
+                 a.input.c_str(), result.jobs.front().defects, job.coarse.defects.size());
+  if (result.unsplit_components > 0 && !a.quiet)
+    std::fprintf(stderr,
+                 "meshcvt: note: %s: with its long edges split the coarse mesh kept %zu defects, with the %u "
+                 "component%s that had them left as given %zu: coarsened so\n",
+                 a.input.c_str(), result.jobs.front().defects, result.unsplit_components,
+                 result.unsplit_components == 1 ? "" : "s", job.coarse.defects.size());
   const SurfacePreparation& prepared = result.prepared;
   if (prepared.split_vertices > 0 && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s: split %llu pinched vert%s (where parts of the surface touch at a point)\n",
@@ -205,6 +211,7 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("split_edges_option", a.split_edges).value("split_edges_ratio", result.split_ratio)
         .value("split_edges", result.split_edges).value("split_discarded", result.split_discarded)
         .value("discarded_job_defects", result.discarded_job_defects)
+        .value("unsplit_components", result.unsplit_components)
         .value("gradation", a.gradation);
     j.begin_object("output").value("vertices", uint64_t(r.mesh.vertex_count())).value("faces", uint64_t(r.mesh.face_count()))
         .value("euler_characteristic", out_info.euler_characteristic).value("input_euler_characteristic", in_info.euler_characteristic)
@@ -223,6 +230,11 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("fit_swaps", co.fit_swaps).value("fit_swap_min_angle_deg", co.fit_swap_min_angle_deg)
         .value("swapped_edges", r.swapped_edges).value("unfolded_vertices", r.unfolded_vertices)
         .value("fit_min_angle_deg", co.fit_min_angle_deg).value("angle_floor_moves", r.angle_floor_moves);
+    j.begin_array("split_jobs");
+    for (const CoarsenSurfaceJob& sj : result.jobs)
+      j.begin_object().value("surface", to_string(sj.surface)).value("defects", uint64_t(sj.defects))
+          .value("seconds", sj.seconds).value("kept", sj.kept).end_object();
+    j.end_array();
     j.begin_array("defects");
     for (const DualDefect& d : r.defects)
       j.begin_object().value("kind", to_string(d.kind)).value("cluster", d.cluster).value("other", d.other).end_object();
@@ -303,7 +315,7 @@ const RegisterCommand reg(30, [](CLI::App& app) {
                   "length (sqrt(2 area / (sqrt 3 n)); with --gradation, where the density is), so that no face is "
                   "longer than a cluster is wide: CAD exports' long thin triangles (libcgal-demo's pinion_small -> 130: Q avg "
                   "0.51 -> 0.84). auto (the default): R = 1.5 when at least one edge per cluster is that long, and "
-                  "the input as given instead where that leaves fewer defects; off = 0");
+                  "the components that keep defects split (or all of it) as given instead where that leaves fewer; off = 0");
   sub->add_option("--fix-rounds", a->fix_rounds,
                   "rounds of fixing the clustering where its dual is not a manifold (default 12; 0 = report only)");
   sub->add_option("--threads", a->threads, "worker threads, 0 = all cores");

@@ -479,6 +479,19 @@ struct CoarsenSurfaceOptions {
   bool count_long_edges = true;
 };
 
+/// One of the jobs coarsen_surface ran when the split surface's coarse mesh kept defects.
+struct CoarsenSurfaceJob {
+  enum Surface : uint8_t {
+    split,         ///< every long edge split
+    partly_split,  ///< split but for the components where the split surface had defects
+    as_given,      ///< nothing split
+  };
+  Surface surface = split;
+  size_t defects = 0;  ///< of its coarse mesh
+  double seconds = 0;  ///< locality order, clustering, fixes, coarse mesh
+  bool kept = false;
+};
+
 struct CoarsenSurfaceResult {
   /// The surface that was clustered and coarsened: the input without its collapsed faces,
   /// subdivided, split, prepared (prepare_surface) and in locality order (reorder_for_locality);
@@ -500,10 +513,17 @@ struct CoarsenSurfaceResult {
   uint64_t long_edges = 0;
   double split_ratio = 0;            ///< R the surface was split at (0: not split)
   uint64_t split_edges = 0;          ///< edges split in the surface (0: not split)
-  /// kSplitEdgesAuto ran two jobs, the split input's and the input's as given, because the first
-  /// kept defects; split_discarded: the second was kept (it had fewer). discarded_job_defects: the
-  /// defects of the job not kept (-1 when only one job ran), discarded_seconds its time.
+  /// kSplitEdgesAuto ran more than one job because the split surface's coarse mesh kept defects:
+  /// in order, the split one, the partly split one (when only some components had defects) and the
+  /// one as given (when defects remained), each kept only if it has fewer defects than the best
+  /// before it. Empty when one job ran.
+  std::vector<CoarsenSurfaceJob> jobs;
+  /// The job kept is the partly split one: components of the input left unsplit (split_edges
+  /// counts the edges split in the others).
+  uint32_t unsplit_components = 0;
+  /// The job kept is the one as given (split_ratio and split_edges are then 0).
   bool split_discarded = false;
+  /// The fewest defects among the jobs not kept (-1 when one job ran), and their time together.
   int64_t discarded_job_defects = -1;
   double discarded_seconds = 0;
   /// Subdivision, density, prepare_surface, splitting and locality order, in seconds (the job's
@@ -517,8 +537,9 @@ struct CoarsenSurfaceResult {
 ///  3. subdivide_midpoint by options.subdivide (each face's density goes to its children);
 ///  4. split_long_edges by options.split_edges;
 ///  5. reorder_for_locality, build_topology, prepare_surface, then coarsen_mesh;
-///  6. with kSplitEdgesAuto, where the split surface's coarse mesh keeps defects, steps 5 on the
-///     unsplit mesh, and the result with fewer defects is kept (ties: the split one).
+///  6. with kSplitEdgesAuto, where the split surface's coarse mesh keeps defects, step 5 again on
+///     the mesh split but for the components that had them, then (defects remaining) on the unsplit
+///     mesh; the result with the fewest defects is kept (ties: the more split one; see jobs).
 /// What coarsen_mesh alone does not: subdivision, splitting long edges, the locality order (the
 /// output depends on the input's face order only through it).
 ///
@@ -531,5 +552,8 @@ struct CoarsenSurfaceResult {
 /// Error when every face is collapsed; and what coarsen_mesh, subdivide_midpoint and
 /// split_long_edges throw.
 CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& options);
+
+/// "split", "partly_split", "as_given".
+const char* to_string(CoarsenSurfaceJob::Surface s);
 
 }  // namespace meshcvt

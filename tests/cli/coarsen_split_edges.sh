@@ -9,6 +9,8 @@
 # - auto's fallback: the elephant stretched 4x along x, with --fix-rounds 0 (so defects stay), at
 #   n = 400 has more defects split than as given: auto keeps the input as given (same bytes as
 #   `--split-edges off`), says so in a note and in the report.
+# - the partial fallback: the cylinder with a flat strip narrower than a cluster, whose split has
+#   defects only in the strip: the strip is left as given, the cylinder split (note, report).
 # - a bad value is exit 2 with a message naming the option, and writes nothing.
 # usage: coarsen_split_edges.sh /path/to/meshcvt /path/to/tests/data
 set -euo pipefail
@@ -101,6 +103,40 @@ assert auto['split_discarded'] and auto['split_edges'] == 0 and auto['split_edge
 assert auto['discarded_job_defects'] == len(split['defects']) > len(off['defects']) == len(auto['defects']) > 0
 assert auto['timings_s']['discarded_job'] > 0
 assert auto['faces'] == off['faces'] < split['faces']
+PY
+
+# The partial fallback: the cylinder and a flat strip 0.5 wide of 10 quads 2 long (z = 0, x >= 3).
+# Split, the strip's clusters are all wider than it and meet both its long sides; auto then splits
+# the cylinder only, keeps the strip's own triangles and says so.
+python3 - "$tmp/cylinder.off" "$tmp/both.off" <<'PY'
+import sys
+tok = open(sys.argv[1]).read().split()
+nv, nf = int(tok[1]), int(tok[2])
+v = [tuple(tok[4 + 3 * i:7 + 3 * i]) for i in range(nv)]
+f = [tuple(int(x) for x in tok[4 + 3 * nv + 4 * i + 1:4 + 3 * nv + 4 * i + 4]) for i in range(nf)]
+base = len(v)
+for i in range(11):
+    v += [(f"{3 + 2 * i}", "0", "0"), (f"{3 + 2 * i}", "0.5", "0")]
+for i in range(10):
+    a, b, c, d = base + 2 * i, base + 2 * i + 1, base + 2 * i + 2, base + 2 * i + 3
+    f += [(a, c, d), (a, d, b)]
+with open(sys.argv[2], 'w') as out:
+    out.write(f"OFF\n{len(v)} {len(f)} 0\n")
+    out.writelines(" ".join(p) + "\n" for p in v)
+    out.writelines(f"3 {a} {b} {c}\n" for a, b, c in f)
+PY
+"$cli" coarsen "$tmp/both.off" -n 60 -o "$tmp/both-out.off" --device cpu --no-error --report "$tmp/both.json" \
+  >/dev/null 2>"$tmp/both.err" || fail "cylinder and strip run failed: $(cat "$tmp/both.err")"
+grep -q "with the 1 component that had them left as given 0" "$tmp/both.err" || fail "no partial note: $(cat "$tmp/both.err")"
+python3 - "$tmp/both.json" <<'PY' || fail "partial fallback report check failed"
+import json, sys
+r = json.load(open(sys.argv[1]))
+jobs = r['split_jobs']
+assert [j['surface'] for j in jobs] == ['split', 'partly_split'], jobs
+assert jobs[0]['defects'] > 0 and not jobs[0]['kept'] and jobs[1]['kept'] and jobs[1]['defects'] == 0, jobs
+assert r['unsplit_components'] == 1 and not r['split_discarded'] and r['split_edges'] > 0
+assert r['discarded_job_defects'] == jobs[0]['defects'] and not r['defects']
+assert r['output']['vertices'] == 60 and r['output']['components'] == 2 and r['output']['boundary_loops'] == 1
 PY
 
 for bad in -1 17 nan abc ""; do
