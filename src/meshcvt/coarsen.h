@@ -357,7 +357,7 @@ struct CoarsenMeshResult {
   /// clustering was made and then merged back to n (merged_back merges); 0 when not used.
   uint32_t refined_clusters = 0;
   uint32_t merged_back = 0;
-  /// Components (of at most 20000 faces) still broken after that, rebuilt from one cluster per
+  /// Components (of at most 65536 faces) still broken after that, rebuilt from one cluster per
   /// face merged down to their count (their merges are counted in merged_back).
   uint32_t face_start_components = 0;
   size_t abandoned_fixes = 0;        ///< fixes made on attempts that were not kept (not in `fixes`)
@@ -406,7 +406,7 @@ struct CoarsenMeshResult {
 ///     triangulation without an edge used twice) and replaces them; where greedy merging stops
 ///     above n (near the fewest vertices the surface allows), a dual edge flip (a strip of faces
 ///     along a border handed to the cluster at its end) opens a merge again; then components of at
-///     most 20000 faces still broken are rebuilt from one cluster per face merged down the same
+///     most 65536 faces still broken are rebuilt from one cluster per face merged down the same
 ///     way. Fix rounds that come back to labels they had before stop (a cycle);
 ///  5. coarsen_clustering of the clustering with the fewest defects.
 /// Degenerate triangles (geometry, not topology) are not fixed.
