@@ -1,11 +1,13 @@
 // meshcvt CLI: `meshcvt cluster` — clusters a mesh's faces and writes them colored by cluster.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <string>
 
 #include "cli/command.h"
 #include "cli/json.h"
 #include "meshcvt/cluster.h"
+#include "meshcvt/density.h"
 #include "meshcvt/error.h"
 #include "meshcvt/io.h"
 #include "meshcvt/mesh_order.h"
@@ -20,6 +22,7 @@ struct ClusterArgs {
   uint32_t clusters = 0, max_iter = 1000, lloyd_steps = 64;
   unsigned threads = 0;
   uint64_t seed = 1;
+  double gradation = 0;  ///< --gradation g: curvature-adaptive density (meshcvt/density.h); 0 = uniform
   bool quiet = false, no_weld = false, no_accelerate = false;
 };
 
@@ -42,7 +45,7 @@ void write_report(const ClusterArgs& a, const Mesh& mesh, const Clustering& c, c
       .value("vertices", uint64_t(mesh.vertex_count()));
   j.begin_object("options").value("clusters", a.clusters).value("metric", a.metric).value("init", a.init)
       .value("topology", a.topology).value("max_iterations", a.max_iter).value("accelerate", !a.no_accelerate).value("lloyd_steps", a.lloyd_steps)
-      .value("threads", a.threads).value("seed", a.seed).end_object();
+      .value("threads", a.threads).value("seed", a.seed).value("gradation", a.gradation).end_object();
   j.value("device", c.device).value("iterations", c.iterations).value("converged", c.converged);
   j.value("energy_initial", c.history.front().energy).value("energy_final", c.history.back().energy);
   j.begin_object("repair").value("rounds", c.repair.rounds).value("split_pieces", c.repair.split_pieces)
@@ -73,6 +76,10 @@ void run_cluster(const ClusterArgs& a) {
   options.threads = a.threads;
   options.seed = a.seed;
   options.device = a.device;
+  if (!(a.gradation >= 0) || !std::isfinite(a.gradation))
+    throw OptionError("--gradation must be a finite number >= 0, not " + std::to_string(a.gradation));
+  if (a.gradation > 0 && options.metric == Metric::l21)
+    throw OptionError("--gradation sizes clusters by curvature for cvt and ccvt; l21 already adapts to the normals");
   bool progress = !a.quiet && stderr_is_terminal();
   if (progress)
     options.progress = print_progress;
@@ -85,6 +92,15 @@ void run_cluster(const ClusterArgs& a) {
   uint64_t collapsed = 0;  // left out by cluster(), see cluster.h
   {
     Topology topology = build_topology(mesh);
+    if (a.gradation > 0) {
+      // As `coarsen --gradation`: the curvature of a copy whose parts are consistently oriented
+      // (prepare_surface flips faces and splits pinched vertices, but keeps the faces' order, so the
+      // density is per face of `mesh` too).
+      Mesh prepared = mesh;
+      Topology prepared_topology = topology;
+      prepare_surface(prepared, prepared_topology);
+      options.density = curvature_density(prepared, prepared_topology, a.gradation);
+    }
     c = cluster(mesh, topology, options);
     if (topology.collapsed_faces < mesh.face_count()) collapsed = topology.collapsed_faces;
   }
@@ -127,6 +143,9 @@ const RegisterCommand reg(20, [](CLI::App& app) {
   sub->add_option("--max-iter", a->max_iter, "maximum iterations per round (default 1000)");
   sub->add_option("--threads", a->threads, "worker threads, 0 = all cores (the result does not depend on it)");
   sub->add_option("--seed", a->seed, "seed for --init random");
+  sub->add_option("--gradation", a->gradation,
+                  "cvt, ccvt: curvature-adaptive density, 0 uniform (default), larger = more, smaller clusters where "
+                  "the surface bends (as coarsen --gradation)");
   sub->add_option("--lloyd-steps", a->lloyd_steps, "at most this many Lloyd steps after initialization (default 64, 0 = none)");
   sub->add_flag("--no-accelerate", a->no_accelerate, "test every border face every iteration (same result, slower)");
   sub->add_flag("--no-weld", a->no_weld, "do not merge vertices with identical positions");

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # CLI test of `meshcvt cluster`: outputs (PLY with cluster ids, labels file, JSON report), the
 # labels' meaning checked independently (exactly n ids, every cluster edge-connected), polygons in
-# the input expanded in order, and clean errors for bad options and bad files.
+# the input expanded in order, clean errors for bad options and bad files, and --gradation (more
+# clusters where a strip bends).
 # Usage: cluster.sh /path/to/meshcvt /path/to/tests/data
 set -u
 meshcvt=$1
@@ -112,4 +113,53 @@ for f in range(surface, nf):
     corners = set(faces[f])
     assert any(labels[g] == labels[f] and corners & set(faces[g]) for g in range(surface)), f
 PY
+# --gradation g: a strip whose first half is flat and whose second half bends through half a turn
+# (the same length: area of each half 1 x 1). Uniform, the halves get about the same clusters; at
+# g = 2 the bent half gets more. The report carries the value; l21 and bad values are refused.
+python3 - "$tmp/bend.off" <<'PY'
+import math, sys
+nx, ny = 60, 20
+r = 1 / math.pi
+v = []
+for i in range(nx + 1):
+    u = 2 * i / nx
+    x, z = (u, 0.0) if u <= 1 else (1 + r * math.sin((u - 1) * math.pi), r * (1 - math.cos((u - 1) * math.pi)))
+    for j in range(ny + 1):
+        v.append((x, j / ny, z))
+f = []
+for i in range(nx):  # faces of column i, in order: the first nx / 2 columns are flat
+    for j in range(ny):
+        a, b, c, d = i * (ny + 1) + j, (i + 1) * (ny + 1) + j, (i + 1) * (ny + 1) + j + 1, i * (ny + 1) + j + 1
+        f += [(a, b, c), (a, c, d)]
+with open(sys.argv[1], 'w') as out:
+    out.write(f"OFF\n{len(v)} {len(f)} 0\n")
+    out.writelines(f"{x:.7f} {y:.7f} {z:.7f}\n" for x, y, z in v)
+    out.writelines(f"3 {a} {b} {c}\n" for a, b, c in f)
+PY
+for g in 0 2; do
+  "$meshcvt" cluster "$tmp/bend.off" -n 40 -o "$tmp/bend-$g.ply" --labels "$tmp/bend-$g.txt" --gradation $g \
+    --report "$tmp/bend-$g.json" --device cpu -q || fail "--gradation $g failed"
+done
+python3 - "$tmp/bend-0.txt" "$tmp/bend-2.txt" "$tmp/bend-2.json" <<'PY' || fail "--gradation: clusters not denser where the strip bends"
+import json, sys
+def bent_clusters(path):
+    labels = [int(x) for x in open(path)]
+    half = len(labels) // 2  # faces of the bent half come last
+    count = {}
+    for f, l in enumerate(labels):
+        count.setdefault(l, [0, 0])[f >= half] += 1
+    assert len(count) == 40
+    return sum(1 for flat, bent in count.values() if bent > flat)
+uniform, graded = bent_clusters(sys.argv[1]), bent_clusters(sys.argv[2])
+print(f"clusters on the bent half: uniform {uniform}, g = 2 {graded}")
+assert 14 <= uniform <= 26, uniform
+assert graded >= uniform + 5, (uniform, graded)
+assert json.load(open(sys.argv[3]))['options']['gradation'] == 2
+PY
+for bad in "--gradation -1" "--gradation nan" "--gradation 1 --metric l21"; do
+  "$meshcvt" cluster "$tmp/bend.off" -n 40 -o "$tmp/bad.ply" $bad 2>"$tmp/err" && fail "accepted: $bad"
+  grep -q -- "--gradation" "$tmp/err" || fail "message for $bad: $(cat "$tmp/err")"
+  [ ! -e "$tmp/bad.ply" ] || fail "$bad wrote an output"
+done
+
 echo "cluster CLI: all checks passed"
