@@ -243,12 +243,17 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
   // faces, for the fallbacks below.
   Mesh unsplit;
   std::vector<float> unsplit_density;
-  std::vector<double> face_limit;  // per face of the unsplit mesh
   std::vector<uint32_t> split_parent;
+  // The split's limit on face f of a mesh whose density is d: 1 / ratio of the coarse edge there.
+  auto limit_of = [&](const std::vector<float>& d, size_t f) {
+    return edge_length_at(result.coarse_edge_length, d, f) / ratio;
+  };
   if (ratio > 0 && result.coarse_edge_length > 0) {
-    face_limit.resize(mesh.face_count());  // with a density: where clusters are smaller, so are the limits
-    for (size_t f = 0; f < mesh.face_count(); ++f)
-      face_limit[f] = edge_length_at(result.coarse_edge_length, density, f) / ratio;
+    std::vector<double> face_limit;  // with a density: where clusters are smaller, so are the limits
+    if (!density.empty()) {
+      face_limit.resize(mesh.face_count());
+      for (size_t f = 0; f < mesh.face_count(); ++f) face_limit[f] = limit_of(density, f);
+    }
     SplitEdgesResult split = split_long_edges(mesh, result.coarse_edge_length / ratio, face_limit);
     if (split.split_edges > 0) {
       result.split_ratio = ratio;
@@ -290,9 +295,9 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
     if (broken.faces_marked > 0 && broken.faces_marked < unsplit.face_count()) {
       // Unreachable limits leave the broken components' faces as they are (a component shares no
       // edge with another, so no neighbour's split reaches in).
-      std::vector<double> partial_limit = face_limit;
+      std::vector<double> partial_limit(unsplit.face_count());
       for (size_t f = 0; f < partial_limit.size(); ++f)
-        if (broken.faces[f]) partial_limit[f] = std::numeric_limits<double>::max();
+        partial_limit[f] = broken.faces[f] ? std::numeric_limits<double>::max() : limit_of(unsplit_density, f);
       SplitEdgesResult partial = split_long_edges(unsplit, 1.0, partial_limit);
       if (partial.split_edges > 0 && partial.mesh.face_count() >= n) {
         const uint64_t partial_edges = partial.split_edges;
@@ -308,6 +313,7 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
       result.split_discarded = true;
       result.split_ratio = 0;
       result.split_edges = 0;
+      result.unsplit_components = 0;
     }
     for (const CoarsenSurfaceJob& job : result.jobs)
       if (!job.kept) {
