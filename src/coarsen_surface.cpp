@@ -25,6 +25,9 @@ namespace meshcvt {
 
 namespace {
 
+// The retry with the surface subdivided once runs on surfaces of at most this many faces.
+constexpr size_t kMaxRetryFaces = size_t(1) << 20;
+
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
@@ -90,6 +93,7 @@ uint64_t edges_longer_than(WorkerPool& pool, const Mesh& mesh, double length, co
 struct JobRun {
   Mesh surface;
   LocalityOrder order;  // surface face i is face order.face_of[i] of the mesh given to run_job
+  std::vector<float> density;  // per face of surface (empty: uniform)
   Topology topology;
   SurfacePreparation prepared;
   size_t prepared_faces = 0;
@@ -102,7 +106,8 @@ JobRun run_job(Mesh m, const std::vector<float>& d, const CoarsenSurfaceOptions&
   const auto start = Clock::now();
   run.order = reorder_for_locality(m);
   CoarsenMeshOptions job = options.job;
-  job.cluster.density = to_reordered(d, run.order);  // coarsen_mesh weighs both the clusters and the dual with it
+  run.density = to_reordered(d, run.order);
+  job.cluster.density = run.density;  // coarsen_mesh weighs both the clusters and the dual with it
   run.order_seconds = seconds_since(start);
   run.topology = build_topology(m);
   if (prepare) {
@@ -276,22 +281,27 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
 
   const bool prepare = options.gradation == 0;
   JobRun run = run_job(std::move(mesh), density, options, prepare);
+  // Where the coarse mesh keeps defects, other surfaces are tried, each kept only if its coarse
+  // mesh has fewer defects than the best so far (result.jobs lists them).
+  JobRun as_given;  // the input as given's job, where it ran after a split and was not kept
+  auto keep_if_better = [&](JobRun&& other, CoarsenSurfaceJob::Surface surface) {
+    if (result.jobs.empty())
+      result.jobs.push_back({result.split_edges > 0 ? CoarsenSurfaceJob::split : CoarsenSurfaceJob::as_given,
+                             run.job.coarse.defects.size(), seconds_of(run), true});
+    const bool better = other.job.coarse.defects.size() < run.job.coarse.defects.size();
+    result.jobs.push_back({surface, other.job.coarse.defects.size(), seconds_of(other), better});
+    if (!better) return false;
+    for (size_t i = 0; i + 1 < result.jobs.size(); ++i) result.jobs[i].kept = false;
+    run = std::move(other);
+    return true;
+  };
   // auto's fallbacks, where the split surface's coarse mesh keeps defects: first the split without
-  // the components that have them, then the input as it was; the job with the fewest defects is
-  // kept (ties: the more split one). A component narrower than a cluster (ALSTOM_TEST4's strip of
-  // 34 faces, all on its boundary, at -> 203) has a valid coarse mesh as given, found from its own
-  // faces, and none split; its other components gain from the split.
+  // the components that have them, then the input as it was (ties: the more split one). A
+  // component narrower than a cluster (ALSTOM_TEST4's strip of 34 faces, all on its boundary, at
+  // -> 203) has a valid coarse mesh as given, found from its own faces, and none split; its other
+  // components gain from the split.
   if (auto_split && result.split_edges > 0 && run.job.defects_remain && unsplit.face_count() >= n) {
-    result.jobs.push_back({CoarsenSurfaceJob::split, run.job.coarse.defects.size(), seconds_of(run), true});
     const BrokenComponents broken = broken_components(run, split_parent, unsplit.face_count());
-    auto keep_if_better = [&](JobRun&& other, CoarsenSurfaceJob::Surface surface) {
-      const bool better = other.job.coarse.defects.size() < run.job.coarse.defects.size();
-      result.jobs.push_back({surface, other.job.coarse.defects.size(), seconds_of(other), better});
-      if (!better) return false;
-      for (size_t i = 0; i + 1 < result.jobs.size(); ++i) result.jobs[i].kept = false;
-      run = std::move(other);
-      return true;
-    };
     if (broken.faces_marked > 0 && broken.faces_marked < unsplit.face_count()) {
       // Unreachable limits leave the broken components' faces as they are (a component shares no
       // edge with another, so no neighbour's split reaches in).
@@ -308,21 +318,48 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
         }
       }
     }
-    if (run.job.defects_remain &&
-        keep_if_better(run_job(std::move(unsplit), unsplit_density, options, prepare), CoarsenSurfaceJob::as_given)) {
-      result.split_discarded = true;
-      result.split_ratio = 0;
-      result.split_edges = 0;
-      result.unsplit_components = 0;
-    }
-    for (const CoarsenSurfaceJob& job : result.jobs)
-      if (!job.kept) {
-        result.discarded_seconds += job.seconds;
-        result.discarded_job_defects = result.discarded_job_defects < 0
-                                           ? int64_t(job.defects)
-                                           : std::min(result.discarded_job_defects, int64_t(job.defects));
+    if (run.job.defects_remain) {
+      JobRun plain = run_job(std::move(unsplit), unsplit_density, options, prepare);
+      if (keep_if_better(std::move(plain), CoarsenSurfaceJob::as_given)) {
+        result.split_discarded = true;
+        result.split_ratio = 0;
+        result.split_edges = 0;
+        result.unsplit_components = 0;
+      } else {
+        as_given = std::move(plain);  // (keep_if_better moves only what it keeps)
       }
+    }
   }
+  // Last, where defects remain and no subdivision was asked for: the surface as given (without a
+  // long-edge split) subdivided once, as --subdivide one level more would. Clusters of four times
+  // the faces have more room to be disks (assimp-testmodels' Wuson -> 373: 21 defects -> 0; its
+  // partly split surface subdivided kept 60). Not above kMaxRetryFaces, where a job on four times
+  // the faces costs more than a warning.
+  const JobRun& base = as_given.surface.face_count() > 0 ? as_given : run;
+  if (run.job.defects_remain && options.subdivide == kSubdivideByPlacement && options.retry_subdivided &&
+      base.surface.face_count() <= kMaxRetryFaces) {
+    std::vector<float> fine;  // its density (reordered with its surface), to the children
+    if (!base.density.empty()) {
+      fine.resize(4 * base.density.size());
+      for (size_t f = 0; f < fine.size(); ++f) fine[f] = base.density[f >> 2];
+    }
+    if (keep_if_better(run_job(subdivide_midpoint(base.surface, 1), fine, options, prepare), CoarsenSurfaceJob::subdivided)) {
+      result.retried_subdivided = true;
+      if (&base == &as_given) {  // (else the surface subdivided is the one kept, split as it was)
+        result.split_discarded = true;
+        result.split_ratio = 0;
+        result.split_edges = 0;
+        result.unsplit_components = 0;
+      }
+    }
+  }
+  for (const CoarsenSurfaceJob& job : result.jobs)
+    if (!job.kept) {
+      result.discarded_seconds += job.seconds;
+      result.discarded_job_defects = result.discarded_job_defects < 0
+                                         ? int64_t(job.defects)
+                                         : std::min(result.discarded_job_defects, int64_t(job.defects));
+    }
   result.prepare_seconds += run.order_seconds;
   if (prepare) {
     result.prepared = run.prepared;
@@ -339,6 +376,7 @@ const char* to_string(CoarsenSurfaceJob::Surface s) {
     case CoarsenSurfaceJob::split: return "split";
     case CoarsenSurfaceJob::partly_split: return "partly_split";
     case CoarsenSurfaceJob::as_given: return "as_given";
+    case CoarsenSurfaceJob::subdivided: return "subdivided";
   }
   return "?";
 }

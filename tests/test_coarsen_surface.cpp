@@ -4,6 +4,7 @@
 // the same result for any thread count, and the errors.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -155,6 +156,7 @@ TEST_CASE("coarsen_surface: where the split surface keeps defects, the input as 
   const uint32_t n = 400;
   CoarsenSurfaceOptions o = with_n(n);
   o.job.max_fix_rounds = 0;
+  o.retry_subdivided = false;  // (tested on its own below)
   CoarsenSurfaceOptions off = o, forced = o;
   off.split_edges = 0;
   forced.split_edges = kAutoSplitEdgesRatio;
@@ -215,6 +217,39 @@ TEST_CASE("coarsen_surface: a component that keeps defects split is left as give
   off.split_edges = 0;
   const CoarsenSurfaceResult as_given = coarsen_surface(both, off);
   CHECK(triangle_quality(r.job.coarse.mesh).q_avg > triangle_quality(as_given.job.coarse.mesh).q_avg + 0.05);
+}
+
+TEST_CASE("coarsen_surface: where defects remain, the input subdivided once is tried and kept if it has fewer") {
+  // The elephant without fix rounds keeps defects; the retry coarsens it subdivided once, as
+  // subdivide = 1 would.
+  const Mesh elephant = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
+  const uint32_t n = 300;
+  CoarsenSurfaceOptions o = with_n(n);
+  o.job.max_fix_rounds = 0;
+  CoarsenSurfaceOptions no_retry = o, once = o, explicit_zero = o;
+  no_retry.retry_subdivided = false;
+  once.subdivide = 1;
+  explicit_zero.subdivide = 0;
+  const CoarsenSurfaceResult r = coarsen_surface(elephant, o);
+  const CoarsenSurfaceResult plain = coarsen_surface(elephant, no_retry);
+  const CoarsenSurfaceResult finer = coarsen_surface(elephant, once);
+  const size_t a = plain.job.coarse.defects.size(), b = finer.job.coarse.defects.size();
+  MESSAGE("defects as given " << a << ", subdivided once " << b);
+  REQUIRE(a > 0);
+  CHECK(plain.jobs.empty());
+  CHECK(coarsen_surface(elephant, explicit_zero).jobs.empty());  // a subdivision asked for: no retry
+  REQUIRE(r.jobs.size() == 2);
+  CHECK(r.jobs[0].surface == CoarsenSurfaceJob::as_given);
+  CHECK(r.jobs[0].defects == a);
+  CHECK(r.jobs[1].surface == CoarsenSurfaceJob::subdivided);
+  CHECK(r.jobs[1].defects == b);
+  CHECK(r.job.coarse.defects.size() == std::min(a, b));
+  CHECK(r.retried_subdivided == (b < a));
+  CHECK(r.jobs[1].kept == (b < a));
+  CHECK(r.jobs[0].kept == !(b < a));
+  CHECK(r.surface.face_count() == (b < a ? 4 : 1) * elephant.face_count());
+  if (b < a) CHECK(r.job.coarse.mesh.positions == finer.job.coarse.mesh.positions);
+  CHECK(r.discarded_job_defects == int64_t(std::max(a, b)));
 }
 
 TEST_CASE("coarsen_surface: subdivision by placement, auto and levels") {

@@ -2,6 +2,7 @@
 // the clusters (Fan et al. Section 6.1), then measures it (Table 1 columns, distance to the input).
 // Between reading and writing, the work is the library's coarsen_surface (subdivision, long edges
 // split, the job); this file parses, prints notes, measures and reports.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -163,6 +164,14 @@ void run_coarsen(const CoarsenArgs& a) {
                  "component%s that had them left as given %zu: coarsened so\n",
                  a.input.c_str(), result.jobs.front().defects, result.unsplit_components,
                  result.unsplit_components == 1 ? "" : "s", job.coarse.defects.size());
+  if (result.retried_subdivided && !a.quiet) {
+    size_t before = result.jobs.front().defects;  // the best of the jobs before the retry
+    for (size_t i = 0; i + 1 < result.jobs.size(); ++i) before = std::min(before, result.jobs[i].defects);
+    std::fprintf(stderr,
+                 "meshcvt: note: %s: the coarse mesh kept %zu defects; with the surface subdivided once %zu: coarsened "
+                 "so (--subdivide 0 turns this off)\n",
+                 a.input.c_str(), before, job.coarse.defects.size());
+  }
   const SurfacePreparation& prepared = result.prepared;
   if (prepared.split_vertices > 0 && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s: split %llu pinched vert%s (where parts of the surface touch at a point)\n",
@@ -212,6 +221,7 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("split_edges", result.split_edges).value("split_discarded", result.split_discarded)
         .value("discarded_job_defects", result.discarded_job_defects)
         .value("unsplit_components", result.unsplit_components)
+        .value("retried_subdivided", result.retried_subdivided)
         .value("gradation", a.gradation);
     j.begin_object("output").value("vertices", uint64_t(r.mesh.vertex_count())).value("faces", uint64_t(r.mesh.face_count()))
         .value("euler_characteristic", out_info.euler_characteristic).value("input_euler_characteristic", in_info.euler_characteristic)
@@ -230,7 +240,7 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("fit_swaps", co.fit_swaps).value("fit_swap_min_angle_deg", co.fit_swap_min_angle_deg)
         .value("swapped_edges", r.swapped_edges).value("unfolded_vertices", r.unfolded_vertices)
         .value("fit_min_angle_deg", co.fit_min_angle_deg).value("angle_floor_moves", r.angle_floor_moves);
-    j.begin_array("split_jobs");
+    j.begin_array("jobs");
     for (const CoarsenSurfaceJob& sj : result.jobs)
       j.begin_object().value("surface", to_string(sj.surface)).value("defects", uint64_t(sj.defects))
           .value("seconds", sj.seconds).value("kept", sj.kept).end_object();
@@ -309,7 +319,8 @@ const RegisterCommand reg(30, [](CLI::App& app) {
                   "surface bends (edge length ~ (1 + curvature x diagonal)^(-g/4))");
   sub->add_option("--subdivide", a->subdivide,
                   "auto | K (0..6): subdivide the input first, K times or (auto) until it has >= 10 faces per vertex (qem: "
-                  "20, as ACVD's 10 vertices; qem's default is auto, the others' 0)");
+                  "20, as ACVD's 10 vertices; qem's default is auto, the others' 0). Without it, where the coarse mesh "
+                  "keeps defects, the input subdivided once is tried too and kept if it has fewer");
   sub->add_option("--split-edges", a->split_edges,
                   "auto | off | R in [0, 16]: first split every input edge longer than 1/R of the coarse mesh's edge "
                   "length (sqrt(2 area / (sqrt 3 n)); with --gradation, where the density is), so that no face is "

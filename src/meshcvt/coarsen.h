@@ -477,6 +477,9 @@ struct CoarsenSurfaceOptions {
   /// Count the edges longer than the coarse edge length when split_edges is 0 too (two passes
   /// over the faces; 0.03-0.1 s on 4.8M faces); they are always counted otherwise.
   bool count_long_edges = true;
+  /// Where defects remain and subdivide is kSubdivideByPlacement: coarsen the kept surface
+  /// subdivided once too (up to 2^20 faces), and keep it if it has fewer defects.
+  bool retry_subdivided = true;
 };
 
 /// One of the jobs coarsen_surface ran when the split surface's coarse mesh kept defects.
@@ -485,6 +488,7 @@ struct CoarsenSurfaceJob {
     split,         ///< every long edge split
     partly_split,  ///< split but for the components where the split surface had defects
     as_given,      ///< nothing split
+    subdivided,    ///< the best surface before it, subdivided once (subdivide_midpoint)
   };
   Surface surface = split;
   size_t defects = 0;  ///< of its coarse mesh
@@ -513,11 +517,14 @@ struct CoarsenSurfaceResult {
   uint64_t long_edges = 0;
   double split_ratio = 0;            ///< R the surface was split at (0: not split)
   uint64_t split_edges = 0;          ///< edges split in the surface (0: not split)
-  /// kSplitEdgesAuto ran more than one job because the split surface's coarse mesh kept defects:
-  /// in order, the split one, the partly split one (when only some components had defects) and the
-  /// one as given (when defects remained), each kept only if it has fewer defects than the best
-  /// before it. Empty when one job ran.
+  /// The jobs run when the first coarse mesh kept defects, in order: the first (split or as
+  /// given); with kSplitEdgesAuto the partly split one (when only some components had defects) and
+  /// the one as given (when defects remained); then the subdivided one (retry_subdivided). Each is
+  /// kept only if it has fewer defects than the best before it. Empty when one job ran.
   std::vector<CoarsenSurfaceJob> jobs;
+  /// The job kept is the subdivided retry: `surface` is the best surface before it subdivided once
+  /// (subdivision_levels and subdivided_faces still describe the subdivision asked for).
+  bool retried_subdivided = false;
   /// The job kept is the partly split one: components of the input left unsplit (split_edges
   /// counts the edges split in the others).
   uint32_t unsplit_components = 0;
@@ -539,7 +546,9 @@ struct CoarsenSurfaceResult {
 ///  5. reorder_for_locality, build_topology, prepare_surface, then coarsen_mesh;
 ///  6. with kSplitEdgesAuto, where the split surface's coarse mesh keeps defects, step 5 again on
 ///     the mesh split but for the components that had them, then (defects remaining) on the unsplit
-///     mesh; the result with the fewest defects is kept (ties: the more split one; see jobs).
+///     mesh; the result with the fewest defects is kept (ties: the more split one; see jobs);
+///  7. where defects remain and no subdivision was asked for, step 5 on the kept surface
+///     subdivided once, kept if it has fewer (retry_subdivided).
 /// What coarsen_mesh alone does not: subdivision, splitting long edges, the locality order (the
 /// output depends on the input's face order only through it).
 ///

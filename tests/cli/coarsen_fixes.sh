@@ -211,7 +211,9 @@ with open(sys.argv[2], 'w') as out:
 PY
 "$cli" coarsen "$tmp/fin.off" -n 100 -o "$tmp/fin-out.off" --device cpu --no-error >"$tmp/out" 2>"$tmp/err" ||
   fail "fin: $(cat "$tmp/err")"
-grep -q "note: .*fin.off: 1 non-manifold edge (three faces or more): the coarse mesh cannot keep it" "$tmp/err" ||
+# (The count is the coarsened surface's: where defects remain and the input subdivided once has
+# fewer, that surface is kept, and the fin's edge is two there.)
+grep -Eq "note: .*fin.off: [12] non-manifold edges? \(three faces or more\): the coarse mesh cannot keep" "$tmp/err" ||
   fail "no note on the non-manifold edge: $(cat "$tmp/err")"
 "$cli" coarsen "$data/elephant.off" -n 100 -o "$tmp/plain-out.off" --device cpu --no-error >"$tmp/out" 2>"$tmp/err"
 grep -q "non-manifold" "$tmp/err" && fail "non-manifold note for the plain elephant: $(cat "$tmp/err")"
