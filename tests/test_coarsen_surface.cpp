@@ -220,36 +220,53 @@ TEST_CASE("coarsen_surface: a component that keeps defects split is left as give
 }
 
 TEST_CASE("coarsen_surface: where defects remain, the input subdivided once is tried and kept if it has fewer") {
-  // The elephant without fix rounds keeps defects; the retry coarsens it subdivided once, as
-  // subdivide = 1 would.
+  // The retry coarsens the input subdivided once, as subdivide = 1 would, and keeps the result
+  // with fewer defects; none runs when a subdivision is asked for or retry_subdivided is off.
+  auto check_retry = [](const Mesh& mesh, CoarsenSurfaceOptions o) {
+    CoarsenSurfaceOptions no_retry = o, once = o, explicit_zero = o;
+    no_retry.retry_subdivided = false;
+    once.subdivide = 1;
+    explicit_zero.subdivide = 0;
+    const CoarsenSurfaceResult r = coarsen_surface(mesh, o);
+    const CoarsenSurfaceResult plain = coarsen_surface(mesh, no_retry);
+    const CoarsenSurfaceResult finer = coarsen_surface(mesh, once);
+    const size_t a = plain.job.coarse.defects.size(), b = finer.job.coarse.defects.size();
+    MESSAGE("defects as given " << a << ", subdivided once " << b);
+    REQUIRE(a > 0);
+    CHECK(plain.jobs.empty());
+    CHECK(coarsen_surface(mesh, explicit_zero).jobs.empty());
+    REQUIRE(r.jobs.size() == 2);
+    CHECK(r.jobs[0].surface == CoarsenSurfaceJob::as_given);
+    CHECK(r.jobs[0].defects == a);
+    CHECK(r.jobs[1].surface == CoarsenSurfaceJob::subdivided);
+    CHECK(r.jobs[1].defects == b);
+    CHECK(r.job.coarse.defects.size() == std::min(a, b));
+    CHECK(r.retried_subdivided == (b < a));
+    CHECK(r.jobs[1].kept == (b < a));
+    CHECK(r.jobs[0].kept == !(b < a));
+    CHECK(r.surface.face_count() == (b < a ? 4 : 1) * mesh.face_count());
+    CHECK(r.job.coarse.mesh.vertex_count() == o.job.cluster.clusters);
+    if (b < a) CHECK(r.job.coarse.mesh.positions == finer.job.coarse.mesh.positions);
+    CHECK(r.discarded_job_defects == int64_t(std::max(a, b)));
+  };
   const Mesh elephant = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
-  const uint32_t n = 300;
-  CoarsenSurfaceOptions o = with_n(n);
-  o.job.max_fix_rounds = 0;
-  CoarsenSurfaceOptions no_retry = o, once = o, explicit_zero = o;
-  no_retry.retry_subdivided = false;
-  once.subdivide = 1;
-  explicit_zero.subdivide = 0;
-  const CoarsenSurfaceResult r = coarsen_surface(elephant, o);
-  const CoarsenSurfaceResult plain = coarsen_surface(elephant, no_retry);
-  const CoarsenSurfaceResult finer = coarsen_surface(elephant, once);
-  const size_t a = plain.job.coarse.defects.size(), b = finer.job.coarse.defects.size();
-  MESSAGE("defects as given " << a << ", subdivided once " << b);
-  REQUIRE(a > 0);
-  CHECK(plain.jobs.empty());
-  CHECK(coarsen_surface(elephant, explicit_zero).jobs.empty());  // a subdivision asked for: no retry
-  REQUIRE(r.jobs.size() == 2);
-  CHECK(r.jobs[0].surface == CoarsenSurfaceJob::as_given);
-  CHECK(r.jobs[0].defects == a);
-  CHECK(r.jobs[1].surface == CoarsenSurfaceJob::subdivided);
-  CHECK(r.jobs[1].defects == b);
-  CHECK(r.job.coarse.defects.size() == std::min(a, b));
-  CHECK(r.retried_subdivided == (b < a));
-  CHECK(r.jobs[1].kept == (b < a));
-  CHECK(r.jobs[0].kept == !(b < a));
-  CHECK(r.surface.face_count() == (b < a ? 4 : 1) * elephant.face_count());
-  if (b < a) CHECK(r.job.coarse.mesh.positions == finer.job.coarse.mesh.positions);
-  CHECK(r.discarded_job_defects == int64_t(std::max(a, b)));
+  SUBCASE("the elephant without fix rounds") {
+    CoarsenSurfaceOptions o = with_n(300);
+    o.job.max_fix_rounds = 0;
+    check_retry(elephant, o);
+  }
+  SUBCASE("the elephant with a fin of six triangles on one of its edges (a non-manifold edge)") {
+    Mesh fin = elephant;
+    const uint32_t a = fin.indices[0], b = fin.indices[1], nv = uint32_t(fin.vertex_count());
+    const float* p = &elephant.positions[3 * size_t(a)];
+    for (int i = 0; i < 6; ++i) test::add_vertex(fin, p[0] + 0.01 * (i + 1), p[1] + 0.05, p[2] + 0.01 * (6 - i));
+    uint32_t previous = b;
+    for (uint32_t i = 0; i < 6; ++i) {
+      test::add_triangle(fin, a, previous, nv + i);
+      previous = nv + i;
+    }
+    check_retry(fin, with_n(100));
+  }
 }
 
 TEST_CASE("coarsen_surface: subdivision by placement, auto and levels") {
