@@ -131,7 +131,7 @@ grep -q "with the 1 component that had them left as given 0" "$tmp/both.err" || 
 python3 - "$tmp/both.json" <<'PY' || fail "partial fallback report check failed"
 import json, sys
 r = json.load(open(sys.argv[1]))
-jobs = r['split_jobs']
+jobs = r['jobs']
 assert [j['surface'] for j in jobs] == ['split', 'partly_split'], jobs
 assert jobs[0]['defects'] > 0 and not jobs[0]['kept'] and jobs[1]['kept'] and jobs[1]['defects'] == 0, jobs
 assert r['unsplit_components'] == 1 and not r['split_discarded'] and r['split_edges'] > 0
