@@ -451,8 +451,9 @@ const char* to_string(DualDefect::Kind k);
 inline constexpr int kSubdivideByPlacement = -2;
 inline constexpr int kSubdivideAuto = -1;
 /// CoarsenSurfaceOptions::split_edges: split at 1 / kAutoSplitEdgesRatio of the coarse edge length
-/// where at least one edge per cluster is longer than that length, else not at all; and coarsen
-/// the input as given instead where that leaves fewer defects. The ratio was chosen by sweeps over
+/// where at least one edge per cluster is longer than that length, else not at all; and, where
+/// the split keeps defects, leave the components that have them as given, or all of it, when that
+/// leaves fewer defects (see coarsen_surface). The ratio was chosen by sweeps over
 /// libcgal-demo's meshes (bench/RESULTS.md, "Coarsening: long faces": 0.5 and 0.7 gave part of
 /// the gain, 2 and 3 refine more for less).
 inline constexpr double kSplitEdgesAuto = -1;
@@ -477,18 +478,19 @@ struct CoarsenSurfaceOptions {
   /// Count the edges longer than the coarse edge length when split_edges is 0 too (two passes
   /// over the faces; 0.03-0.1 s on 4.8M faces); they are always counted otherwise.
   bool count_long_edges = true;
-  /// Where defects remain and subdivide is kSubdivideByPlacement: coarsen the kept surface
-  /// subdivided once too (up to 2^20 faces), and keep it if it has fewer defects.
+  /// Where defects remain and subdivide is kSubdivideByPlacement: coarsen the surface as given
+  /// (without a long-edge split) subdivided once too (up to 2^20 faces), and keep it if it has
+  /// fewer defects.
   bool retry_subdivided = true;
 };
 
-/// One of the jobs coarsen_surface ran when the split surface's coarse mesh kept defects.
+/// One of the jobs coarsen_surface ran when the first coarse mesh kept defects.
 struct CoarsenSurfaceJob {
   enum Surface : uint8_t {
     split,         ///< every long edge split
     partly_split,  ///< split but for the components where the split surface had defects
     as_given,      ///< nothing split
-    subdivided,    ///< the best surface before it, subdivided once (subdivide_midpoint)
+    subdivided,    ///< the surface as given (the kept one where that job did not run), subdivided once
   };
   Surface surface = split;
   size_t defects = 0;  ///< of its coarse mesh
@@ -522,8 +524,9 @@ struct CoarsenSurfaceResult {
   /// the one as given (when defects remained); then the subdivided one (retry_subdivided). Each is
   /// kept only if it has fewer defects than the best before it. Empty when one job ran.
   std::vector<CoarsenSurfaceJob> jobs;
-  /// The job kept is the subdivided retry: `surface` is the best surface before it subdivided once
-  /// (subdivision_levels and subdivided_faces still describe the subdivision asked for).
+  /// The job kept is the subdivided retry: `surface` is the surface as given (without a split;
+  /// the kept one where the job as given did not run) subdivided once (subdivision_levels and
+  /// subdivided_faces still describe the subdivision asked for).
   bool retried_subdivided = false;
   /// The job kept is the partly split one: components of the input left unsplit (split_edges
   /// counts the edges split in the others).
@@ -547,8 +550,8 @@ struct CoarsenSurfaceResult {
 ///  6. with kSplitEdgesAuto, where the split surface's coarse mesh keeps defects, step 5 again on
 ///     the mesh split but for the components that had them, then (defects remaining) on the unsplit
 ///     mesh; the result with the fewest defects is kept (ties: the more split one; see jobs);
-///  7. where defects remain and no subdivision was asked for, step 5 on the kept surface
-///     subdivided once, kept if it has fewer (retry_subdivided).
+///  7. where defects remain and no subdivision was asked for, step 5 on the surface as given
+///     (without a split) subdivided once, kept if it has fewer (retry_subdivided).
 /// What coarsen_mesh alone does not: subdivision, splitting long edges, the locality order (the
 /// output depends on the input's face order only through it).
 ///
@@ -562,7 +565,7 @@ struct CoarsenSurfaceResult {
 /// split_long_edges throw.
 CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& options);
 
-/// "split", "partly_split", "as_given".
+/// "split", "partly_split", "as_given", "subdivided".
 const char* to_string(CoarsenSurfaceJob::Surface s);
 
 }  // namespace meshcvt
