@@ -112,7 +112,7 @@ uint32_t surface_minimum(int64_t chi, uint64_t loops, bool manifold, bool orient
 }
 
 // Faces, chi, loops and the minimum of every component, each component judged on its own.
-void describe_components(const Mesh& mesh, const Topology& topology, ComponentAllocation& a) {
+void fill_components(const Mesh& mesh, const Topology& topology, ComponentAllocation& a) {
   const uint32_t nc = topology.component_count;
   a.minimum.assign(nc, 0);
   a.faces.assign(nc, 0);
@@ -1761,13 +1761,21 @@ class FixLoop {
 
 }  // namespace
 
+ComponentAllocation describe_components(const Mesh& mesh, const Topology& topology) {
+  if (topology.face_component.size() != mesh.face_count())
+    throw OptionError("coarsen: the topology was not built for this mesh");
+  ComponentAllocation a;
+  fill_components(mesh, topology, a);
+  return a;
+}
+
 ComponentAllocation allocate_component_clusters(const Mesh& mesh, const Topology& topology, uint32_t n,
                                                 const std::vector<float>* density) {
   if (topology.face_component.size() != mesh.face_count())
     throw OptionError("coarsen: the topology was not built for this mesh");
   check_density(mesh, density);
   ComponentAllocation a;
-  describe_components(mesh, topology, a);
+  fill_components(mesh, topology, a);
   const uint32_t nc = topology.component_count;
   if (n == 0) throw OptionError("coarsen: the number of vertices must be at least 1");
   if (n > mesh.face_count())

@@ -87,12 +87,134 @@ uint64_t edges_longer_than(WorkerPool& pool, const Mesh& mesh, double length, co
   return (half_edges + 1) / 2;
 }
 
+// Per-face values of a split mesh from those of the faces they came from (empty stays empty).
+std::vector<float> inherited(const std::vector<float>& values, const std::vector<uint32_t>& parent) {
+  if (values.empty()) return {};
+  std::vector<float> out(parent.size());
+  for (size_t f = 0; f < out.size(); ++f) out[f] = values[parent[f]];
+  return out;
+}
+
+// Components of fewer faces than they need clusters are refined below (by subdivide_faces) until
+// they have enough. describe_components, which knows the need, copies out every component; a
+// component can need more clusters than it has faces only where it has fewer faces than vertices
+// (its need is at most its vertex count when it is a simplicial surface) or few faces at all (a
+// pseudo-triangulation with repeated edges), so only then is it called.
+constexpr uint32_t kFewFaces = 64;
+// Levels at most for one component (a lone triangle needs one).
+constexpr unsigned kMaxComponentLevels = 6;
+
+// Each component of m with fewer faces than describe_components' minimum (a lone triangle needs
+// 3 clusters, a closed pair of faces 4) midpoint-subdivided until it has at least that many
+// faces, with every component that shares an edge with it (a non-manifold edge), so that coarsen_mesh can give it its clusters instead of refusing the
+// mesh (assimp-testmodels' box_longline.obj, libcgal-demo's b9_mesh: lone triangles). The rest of
+// m is untouched. density (per face, may be empty) follows; parent: per face of the new m, its
+// face in the m given (left empty when nothing is refined). topology is rebuilt when m changes.
+// Returns the number of components refined.
+uint32_t refine_small_components(Mesh& m, Topology& topology, std::vector<float>& density,
+                                 std::vector<uint32_t>& parent) {
+  const uint32_t nc = topology.component_count;
+  // (One component with at least as many faces as the mesh has vertices: no pass over the faces.)
+  if (nc == 1 && m.face_count() >= std::max<size_t>(m.vertex_count(), kFewFaces)) return 0;
+  {
+    std::vector<uint32_t> faces(nc, 0), vertices(nc, 0), last(m.vertex_count(), kNone);
+    for (size_t f = 0; f < m.face_count(); ++f) {
+      const uint32_t c = topology.face_component[f];
+      ++faces[c];
+      for (int k = 0; k < 3; ++k) {  // (a vertex of several components may count more than once: safe)
+        uint32_t& seen_in = last[m.indices[3 * f + k]];
+        if (seen_in != c) seen_in = c, ++vertices[c];
+      }
+    }
+    bool suspect = false;
+    for (uint32_t c = 0; c < nc && !suspect; ++c) suspect = faces[c] < vertices[c] || faces[c] < kFewFaces;
+    if (!suspect) return 0;
+  }
+  const ComponentAllocation a = describe_components(m, topology);
+  std::vector<unsigned> levels(nc, 0);
+  for (uint32_t c = 0; c < nc; ++c)
+    for (uint64_t have = a.faces[c]; have < a.minimum[c] && levels[c] < kMaxComponentLevels; have *= 4) ++levels[c];
+  // A component sharing an edge (a non-manifold one) with a component to refine is refined with
+  // it, as many levels, else the split would leave a T-junction on that edge; and so on, until no
+  // component to refine shares an edge with one that is not.
+  for (bool grew = true; grew;) {
+    grew = false;
+    std::vector<std::pair<uint64_t, uint32_t>> edges;  // (lower << 32 | higher, component) of the faces to refine
+    std::vector<uint8_t> touched(m.vertex_count(), 0);
+    for (size_t f = 0; f < m.face_count(); ++f) {
+      const uint32_t c = topology.face_component[f];
+      if (levels[c] == 0) continue;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = m.indices[3 * f + k], w = m.indices[3 * f + (k + 1) % 3];
+        touched[v] = 1;
+        if (v != w) edges.push_back({uint64_t(std::min(v, w)) << 32 | std::max(v, w), c});
+      }
+    }
+    if (edges.empty()) return 0;
+    std::sort(edges.begin(), edges.end());
+    for (size_t f = 0; f < m.face_count(); ++f) {
+      unsigned& own = levels[topology.face_component[f]];
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = m.indices[3 * f + k], w = m.indices[3 * f + (k + 1) % 3];
+        if (v == w || !touched[v] || !touched[w]) continue;
+        const uint64_t key = uint64_t(std::min(v, w)) << 32 | std::max(v, w);
+        for (auto it = std::lower_bound(edges.begin(), edges.end(), std::pair<uint64_t, uint32_t>{key, 0});
+             it != edges.end() && it->first == key; ++it)
+          if (levels[it->second] > own) own = levels[it->second], grew = true;
+      }
+    }
+  }
+  uint32_t refined = 0;  // the components too small (not those refined with them)
+  unsigned rounds = 0;
+  for (uint32_t c = 0; c < nc; ++c) refined += a.faces[c] < a.minimum[c], rounds = std::max(rounds, levels[c]);
+  if (rounds == 0) return 0;
+  // Level by level (components may need different counts); children keep their face's component.
+  std::vector<uint32_t> component = topology.face_component;
+  parent.resize(m.face_count());
+  for (size_t f = 0; f < parent.size(); ++f) parent[f] = uint32_t(f);
+  for (unsigned round = 0; round < rounds; ++round) {
+    std::vector<uint8_t> selected(m.face_count());
+    for (size_t f = 0; f < selected.size(); ++f) selected[f] = levels[component[f]] > round;
+    SubdividedFaces fine = subdivide_faces(m, selected, 1);
+    std::vector<uint32_t> next_parent(fine.parent.size()), next_component(fine.parent.size());
+    for (size_t f = 0; f < fine.parent.size(); ++f) {
+      next_parent[f] = parent[fine.parent[f]];
+      next_component[f] = component[fine.parent[f]];
+    }
+    density = inherited(density, fine.parent);
+    parent = std::move(next_parent);
+    component = std::move(next_component);
+    m = std::move(fine.mesh);
+  }
+  // Where the refined surface still has a component too small, subdividing did not help: two
+  // faces on the same three corners (a pillow of no volume) come apart at their non-manifold
+  // edges into pieces as small (assimp-testmodels' concave_polygon.obj). That mesh cannot be
+  // coarsened; the error says why rather than asking for a subdivision.
+  Topology fine_topology = build_topology(m);
+  const ComponentAllocation after = describe_components(m, fine_topology);
+  for (uint32_t c = 0; c < fine_topology.component_count; ++c)
+    if (after.faces[c] < after.minimum[c]) {
+      uint32_t first = 0;  // the first component of the surface as given that was too small
+      while (first < nc && a.faces[first] >= a.minimum[first]) ++first;
+      throw OptionError("coarsen: component " + std::to_string(first) + " (" + std::to_string(a.faces[first]) +
+                        " face" + (a.faces[first] == 1 ? "" : "s") + ") has fewer faces than the " +
+                        std::to_string(a.minimum[first]) +
+                        " clusters it needs to come out as a valid surface, and subdivided it comes apart at "
+                        "non-manifold edges into parts as small (faces on the same corners, or dangling at "
+                        "an edge of another part?): remove those faces first");
+    }
+  topology = std::move(fine_topology);
+  return refined;
+}
+
 // One job on surface m with density d: the locality order (the output depends on the face order
-// only through it), the topology, prepare_surface unless the gradation did it on the input, and
-// coarsen_mesh.
+// only through it), the topology, prepare_surface unless the gradation did it on the input,
+// refine_small_components, and coarsen_mesh.
 struct JobRun {
   Mesh surface;
-  LocalityOrder order;  // surface face i is face order.face_of[i] of the mesh given to run_job
+  LocalityOrder order;  // face i of the mesh given to run_job, reordered, is face order.face_of[i] of it
+  std::vector<uint32_t> refine_parent;  // surface face -> reordered face (empty: none refined)
+  uint32_t refined_components = 0;
   std::vector<float> density;  // per face of surface (empty: uniform)
   Topology topology;
   SurfacePreparation prepared;
@@ -107,13 +229,15 @@ JobRun run_job(Mesh m, const std::vector<float>& d, const CoarsenSurfaceOptions&
   run.order = reorder_for_locality(m);
   CoarsenMeshOptions job = options.job;
   run.density = to_reordered(d, run.order);
-  job.cluster.density = run.density;  // coarsen_mesh weighs both the clusters and the dual with it
   run.order_seconds = seconds_since(start);
   run.topology = build_topology(m);
   if (prepare) {
     run.prepared = prepare_surface(m, run.topology);
     run.prepared_faces = m.face_count();
   }
+  if (options.refine_small_components)
+    run.refined_components = refine_small_components(m, run.topology, run.density, run.refine_parent);
+  job.cluster.density = run.density;  // coarsen_mesh weighs both the clusters and the dual with it
   run.job = coarsen_mesh(m, run.topology, job);
   run.surface = std::move(m);
   return run;
@@ -123,13 +247,6 @@ double seconds_of(const JobRun& run) {
   return run.order_seconds + run.job.cluster_seconds + run.job.fix_seconds + run.job.coarsen_seconds;
 }
 
-// Per-face values of a split mesh from those of the faces they came from (empty stays empty).
-std::vector<float> inherited(const std::vector<float>& values, const std::vector<uint32_t>& parent) {
-  if (values.empty()) return {};
-  std::vector<float> out(parent.size());
-  for (size_t f = 0; f < out.size(); ++f) out[f] = values[parent[f]];
-  return out;
-}
 
 // The components of a job's surface that hold a cluster a defect names, as faces of the mesh the
 // surface was split from (parent: split face -> face of that mesh). A split keeps components (the
@@ -157,7 +274,8 @@ BrokenComponents broken_components(const JobRun& run, const std::vector<uint32_t
   for (uint8_t b : broken) out.components += b;
   for (size_t f = 0; f < labels.size(); ++f) {
     if (!broken[topology.face_component[f]]) continue;
-    const size_t split_face = run.order.identity() ? f : run.order.face_of[f];
+    const size_t reordered = run.refine_parent.empty() ? f : run.refine_parent[f];
+    const size_t split_face = run.order.identity() ? reordered : run.order.face_of[reordered];
     uint8_t& mark = out.faces[parent[split_face]];
     out.faces_marked += !mark;
     mark = 1;
@@ -365,6 +483,7 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
     result.prepared = run.prepared;
     result.prepared_faces = run.prepared_faces;
   }
+  result.refined_components = run.refined_components;
   result.surface = std::move(run.surface);
   result.topology = std::move(run.topology);
   result.job = std::move(run.job);

@@ -183,6 +183,78 @@ Mesh subdivide_midpoint(const Mesh& mesh, unsigned levels) {
   return current;
 }
 
+SubdividedFaces subdivide_faces(const Mesh& mesh, const std::vector<uint8_t>& selected, unsigned levels) {
+  const size_t nv = mesh.vertex_count(), nf = mesh.face_count();
+  if (selected.size() != nf)
+    throw OptionError("subdivide_faces: " + std::to_string(selected.size()) + " selection entries for " +
+                      std::to_string(nf) + " faces");
+  if (!mesh.source_polygon.empty() && mesh.source_polygon.size() != nf)
+    throw OptionError("mesh has " + std::to_string(mesh.source_polygon.size()) + " source_polygon entries for " +
+                      std::to_string(nf) + " faces");
+  for (uint32_t i : mesh.indices)
+    if (i >= nv)
+      throw OptionError("mesh uses vertex " + std::to_string(i) + " but has " + std::to_string(nv) + " vertices");
+  // The selected faces alone, their vertices renumbered in order of first use.
+  Mesh part;
+  std::vector<uint32_t> local(nv, kNone), global;
+  std::vector<uint64_t> edges;  // (lower << 32 | higher) of the selected faces' edges
+  for (size_t f = 0; f < nf; ++f) {
+    if (!selected[f]) continue;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = mesh.indices[3 * f + k], w = mesh.indices[3 * f + (k + 1) % 3];
+      if (local[v] == kNone) {
+        local[v] = uint32_t(global.size());
+        global.push_back(v);
+        part.positions.insert(part.positions.end(), &mesh.positions[3 * size_t(v)], &mesh.positions[3 * size_t(v)] + 3);
+      }
+      part.indices.push_back(local[v]);
+      if (v != w) edges.push_back(uint64_t(std::min(v, w)) << 32 | std::max(v, w));
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  // A face left as it is must not have an edge that gets a midpoint.
+  for (size_t f = 0; f < nf; ++f) {
+    if (selected[f]) continue;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = mesh.indices[3 * f + k], w = mesh.indices[3 * f + (k + 1) % 3];
+      if (v == w || local[v] == kNone || local[w] == kNone) continue;
+      if (std::binary_search(edges.begin(), edges.end(), uint64_t(std::min(v, w)) << 32 | std::max(v, w)))
+        throw OptionError("subdivide_faces: face " + std::to_string(f) +
+                          " is not selected but shares an edge with a selected face (the split would leave a T-junction)");
+    }
+  }
+  const Mesh fine = subdivide_midpoint(part, levels);
+  const size_t part_nv = global.size(), children = size_t(1) << (2 * levels);
+  if (nv + (fine.vertex_count() - part_nv) > kMaxVertices ||
+      nf + (children - 1) * part.face_count() > kMaxFaces)
+    throw OptionError("subdivide_faces: the result would be beyond 32-bit indices");
+  SubdividedFaces out;
+  out.mesh.positions = mesh.positions;
+  out.mesh.positions.insert(out.mesh.positions.end(), fine.positions.begin() + 3 * part_nv, fine.positions.end());
+  auto vertex_of = [&](uint32_t i) { return i < part_nv ? global[i] : uint32_t(nv + (i - part_nv)); };
+  const size_t faces_out = nf + (children - 1) * part.face_count();
+  out.mesh.indices.reserve(3 * faces_out);
+  out.parent.reserve(faces_out);
+  size_t next_part_face = 0;
+  for (size_t f = 0; f < nf; ++f) {
+    if (!selected[f]) {
+      out.mesh.indices.insert(out.mesh.indices.end(), &mesh.indices[3 * f], &mesh.indices[3 * f] + 3);
+      out.parent.push_back(uint32_t(f));
+      continue;
+    }
+    for (size_t c = next_part_face * children; c < (next_part_face + 1) * children; ++c) {
+      for (int k = 0; k < 3; ++k) out.mesh.indices.push_back(vertex_of(fine.indices[3 * c + k]));
+      out.parent.push_back(uint32_t(f));
+    }
+    ++next_part_face;
+  }
+  assert(out.parent.size() == faces_out);
+  out.mesh.source_polygon.resize(faces_out);
+  for (size_t i = 0; i < faces_out; ++i)
+    out.mesh.source_polygon[i] = mesh.source_polygon.empty() ? out.parent[i] : mesh.source_polygon[out.parent[i]];
+  return out;
+}
+
 unsigned subdivision_levels_for(size_t faces, uint32_t clusters, double min_faces_per_cluster) {
   if (!(min_faces_per_cluster >= 0) || !std::isfinite(min_faces_per_cluster))
     throw OptionError("minimum faces per cluster must be a finite number >= 0, not " +

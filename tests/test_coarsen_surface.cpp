@@ -434,3 +434,61 @@ TEST_CASE("coarsen_surface: errors") {
   test::add_triangle(collapsed, 0, 0, 1);
   CHECK_THROWS_AS(coarsen_surface(collapsed, with_n(4)), Error);
 }
+
+TEST_CASE("coarsen_surface: a component with fewer faces than it needs clusters is subdivided, not refused") {
+  // A sphere of 320 faces and, apart from it, a lone triangle: a disk needs 3 clusters and has
+  // one face, so coarsen_mesh alone refuses the mesh.
+  Mesh m = test::icosphere(2);
+  const size_t sphere_faces = m.face_count();
+  const uint32_t a = test::add_vertex(m, 3, 0, 0), b = test::add_vertex(m, 3.3, 0, 0), c = test::add_vertex(m, 3, 0.3, 0);
+  test::add_triangle(m, a, b, c);
+  const uint32_t n = 30;
+
+  CoarsenSurfaceOptions off = with_n(n);
+  off.refine_small_components = false;
+  try {
+    coarsen_surface(m, off);
+    FAIL("no error without the refinement");
+  } catch (const OptionError& e) {
+    CHECK_MESSAGE(std::string(e.what()).find("fewer than the 3 clusters") != std::string::npos, e.what());
+  }
+
+  const CoarsenSurfaceResult r = coarsen_surface(m, with_n(n));
+  CHECK(r.refined_components == 1);
+  CHECK(r.surface.face_count() == sphere_faces + 4);  // one level: 4 faces for 3 clusters
+  check_valid(r, n);
+  const MeshInfo out = mesh_info(r.job.coarse.mesh, build_topology(r.job.coarse.mesh));
+  CHECK(out.components == 2);
+  CHECK(out.boundary_loops == 1);
+  // The lone triangle's part holds 3 of the clusters.
+  CHECK(std::count(r.job.allocation.clusters.begin(), r.job.allocation.clusters.end(), 3u) == 1);
+
+  // A fin on one of the sphere's edges (a non-manifold edge): the sphere is subdivided with it,
+  // else the fin's midpoint on that edge would be a T-junction in the sphere.
+  Mesh fin = test::icosphere(2);
+  const uint32_t u = fin.indices[0], v = fin.indices[1];
+  const uint32_t w = test::add_vertex(fin, 2 * fin.positions[3 * u], 2 * fin.positions[3 * u + 1],
+                                      2 * fin.positions[3 * u + 2]);
+  test::add_triangle(fin, u, v, w);
+  const CoarsenSurfaceResult rf = coarsen_surface(fin, with_n(n));
+  CHECK(rf.refined_components == 1);
+  CHECK(rf.surface.face_count() == 4 * fin.face_count());
+  CHECK(rf.job.coarse.mesh.vertex_count() == n);
+  const Topology tf = build_topology(rf.surface);
+  CHECK(mesh_info(rf.surface, tf).nonmanifold_edges == 2);  // the fin's edge, in two halves: no T-junction
+
+  // Two faces on the same three corners (a closed pillow of no volume, which needs 4 clusters)
+  // come apart at their non-manifold edges when subdivided: no number of levels helps, and the
+  // error says so.
+  Mesh pillow = test::icosphere(2);
+  const uint32_t p = test::add_vertex(pillow, 3, 0, 0), q = test::add_vertex(pillow, 3.3, 0, 0),
+                 s = test::add_vertex(pillow, 3, 0.3, 0);
+  test::add_triangle(pillow, p, q, s);
+  test::add_triangle(pillow, p, s, q);
+  try {
+    coarsen_surface(pillow, with_n(n));
+    FAIL("no error for the pillow");
+  } catch (const OptionError& e) {
+    CHECK_MESSAGE(std::string(e.what()).find("comes apart") != std::string::npos, e.what());
+  }
+}

@@ -2,6 +2,7 @@
 // characteristic), area, orientation, source_polygon, and subdivision_levels_for.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -165,4 +166,57 @@ TEST_CASE("subdivision_levels_for: smallest k with faces * 4^k >= clusters * min
   CHECK_THROWS_AS(meshcvt::subdivision_levels_for(10, 5, -1), meshcvt::OptionError);
   CHECK_THROWS_AS(meshcvt::subdivision_levels_for(10, 5, NAN), meshcvt::OptionError);
   CHECK_THROWS_AS(meshcvt::subdivision_levels_for(10, 5, INFINITY), meshcvt::OptionError);
+}
+
+TEST_CASE("subdivide_faces: only the selected faces, children in their place, parents, no T-junction") {
+  // The octahedron and, apart from it, a lone triangle (vertices 6, 7, 8).
+  Mesh m = octahedron();
+  const float lone[] = {3, 0, 0, 4, 0, 0, 3, 1, 0};
+  m.positions.insert(m.positions.end(), lone, lone + 9);
+  m.indices.insert(m.indices.end(), {6, 7, 8});
+  std::vector<uint8_t> selected(m.face_count(), 0);
+  selected[8] = 1;
+  for (unsigned levels : {1u, 2u}) {
+    const meshcvt::SubdividedFaces s = meshcvt::subdivide_faces(m, selected, levels);
+    const size_t children = size_t(1) << (2 * levels);
+    REQUIRE(s.mesh.face_count() == 8 + children);
+    REQUIRE(s.parent.size() == s.mesh.face_count());
+    // The octahedron's faces and vertices are as they were; the lone triangle's children follow.
+    for (size_t f = 0; f < 8; ++f) {
+      CHECK(s.parent[f] == f);
+      for (int k = 0; k < 3; ++k) CHECK(s.mesh.indices[3 * f + k] == m.indices[3 * f + k]);
+    }
+    for (size_t f = 8; f < s.mesh.face_count(); ++f) CHECK(s.parent[f] == 8);
+    CHECK(std::equal(m.positions.begin(), m.positions.end(), s.mesh.positions.begin()));
+    // 3 + 3 midpoints at one level, 15 vertices in all at two.
+    CHECK(s.mesh.vertex_count() == 9 + (levels == 1 ? 3 : 12));
+    CHECK(s.mesh.source_polygon == s.parent);
+    // Area, orientation and the Euler characteristic are kept; the two parts stay apart.
+    CHECK(area(s.mesh) == doctest::Approx(area(m)));
+    const meshcvt::Topology t = meshcvt::build_topology(s.mesh);
+    const meshcvt::MeshInfo before = meshcvt::mesh_info(m, meshcvt::build_topology(m)),
+                            after = meshcvt::mesh_info(s.mesh, t);
+    CHECK(after.euler_characteristic == before.euler_characteristic);
+    CHECK(after.boundary_loops == 1);
+    CHECK(after.components == 2);
+    CHECK(t.orientation_flips == 0);
+    for (size_t f = 8; f < s.mesh.face_count(); ++f) {
+      double n[3];
+      normal(s.mesh, f, n);
+      CHECK(n[2] > 0);
+    }
+  }
+  // Nothing selected: a copy.
+  const meshcvt::SubdividedFaces none = meshcvt::subdivide_faces(m, std::vector<uint8_t>(m.face_count(), 0), 1);
+  CHECK(none.mesh.indices == m.indices);
+  CHECK(none.mesh.positions == m.positions);
+
+  // A selected face sharing an edge with one that is not would leave a T-junction.
+  std::vector<uint8_t> one(8 + 1, 0);
+  one[0] = 1;
+  CHECK_THROWS_AS(meshcvt::subdivide_faces(m, one, 1), meshcvt::OptionError);
+  CHECK_THROWS_AS(meshcvt::subdivide_faces(m, std::vector<uint8_t>(3, 1), 1), meshcvt::OptionError);
+  Mesh bad = m;
+  bad.indices[0] = 99;
+  CHECK_THROWS_AS(meshcvt::subdivide_faces(bad, selected, 1), meshcvt::OptionError);
 }

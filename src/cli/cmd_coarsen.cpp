@@ -172,6 +172,12 @@ void run_coarsen(const CoarsenArgs& a) {
                  "so (--subdivide 0 turns this off)\n",
                  a.input.c_str(), before, job.coarse.defects.size());
   }
+  if (result.refined_components > 0 && !a.quiet)
+    std::fprintf(stderr,
+                 "meshcvt: note: %s: subdivided %u component%s with fewer faces than the clusters %s to "
+                 "come out as a valid surface\n",
+                 a.input.c_str(), result.refined_components, result.refined_components == 1 ? "" : "s",
+                 result.refined_components == 1 ? "it needs" : "they need");
   const SurfacePreparation& prepared = result.prepared;
   if (prepared.split_vertices > 0 && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s: split %llu pinched vert%s (where parts of the surface touch at a point)\n",
@@ -222,6 +228,7 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("discarded_job_defects", result.discarded_job_defects)
         .value("unsplit_components", result.unsplit_components)
         .value("retried_subdivided", result.retried_subdivided)
+        .value("refined_components", result.refined_components)
         .value("gradation", a.gradation);
     j.begin_object("output").value("vertices", uint64_t(r.mesh.vertex_count())).value("faces", uint64_t(r.mesh.face_count()))
         .value("euler_characteristic", out_info.euler_characteristic).value("input_euler_characteristic", in_info.euler_characteristic)

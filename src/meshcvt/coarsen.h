@@ -290,6 +290,14 @@ struct ComponentAllocation {
   std::vector<uint8_t> manifold;               ///< per component: orientable or not, no non-manifold vertex/edge
 };
 
+/// The components of `mesh` as allocate_component_clusters sees them: per component its faces,
+/// Euler characteristic, boundary loops, whether it is a manifold, and the fewest clusters it can
+/// come out with as a valid surface (`minimum`); `clusters` is left empty. A component with fewer
+/// faces than its minimum cannot be coarsened until it is refined (coarsen_surface subdivides
+/// such components). mesh, topology: the mesh and build_topology(mesh). Throws OptionError when
+/// the topology is not the mesh's. O(F + V).
+ComponentAllocation describe_components(const Mesh& mesh, const Topology& topology);
+
 /// Shares n clusters among the components of `mesh` in proportion to their areas (integral of
 /// sqrt(rho) dA when a per-face density rho is given: the point density of a CVT with density rho in
 /// 2D), never below a component's minimum (see ComponentAllocation) nor above its face count;
@@ -482,6 +490,12 @@ struct CoarsenSurfaceOptions {
   /// (without a long-edge split) subdivided once too (up to 2^20 faces), and keep it if it has
   /// fewer defects.
   bool retry_subdivided = true;
+  /// Subdivide (subdivide_faces) each component with fewer faces than the clusters it needs to
+  /// come out as a valid surface (describe_components' minimum: 3 for a lone triangle), until it
+  /// has enough, instead of refusing the mesh (as coarsen_mesh does when this is false). The
+  /// components that share an edge with it (a non-manifold edge) are subdivided with it, so the
+  /// surface gets no T-junction.
+  bool refine_small_components = true;
 };
 
 /// One of the jobs coarsen_surface ran when the first coarse mesh kept defects.
@@ -500,7 +514,8 @@ struct CoarsenSurfaceJob {
 
 struct CoarsenSurfaceResult {
   /// The surface that was clustered and coarsened: the input without its collapsed faces,
-  /// subdivided, split, prepared (prepare_surface) and in locality order (reorder_for_locality);
+  /// subdivided, split, prepared (prepare_surface), in locality order (reorder_for_locality) and
+  /// with its too small components subdivided (refined_components);
   /// job.clustering.labels are per face of it, and it is what the coarse mesh approximates.
   Mesh surface;
   Topology topology;        ///< build_topology(surface)
@@ -528,6 +543,9 @@ struct CoarsenSurfaceResult {
   /// the kept one where the job as given did not run) subdivided once (subdivision_levels and
   /// subdivided_faces still describe the subdivision asked for).
   bool retried_subdivided = false;
+  /// Components of the kept job's surface subdivided because they had fewer faces than the
+  /// clusters they need (CoarsenSurfaceOptions::refine_small_components).
+  uint32_t refined_components = 0;
   /// The job kept is the partly split one: components of the input left unsplit (split_edges
   /// counts the edges split in the others).
   uint32_t unsplit_components = 0;
@@ -546,7 +564,8 @@ struct CoarsenSurfaceResult {
 ///  2. with a gradation, prepare_surface and curvature_density on the input's own faces;
 ///  3. subdivide_midpoint by options.subdivide (each face's density goes to its children);
 ///  4. split_long_edges by options.split_edges;
-///  5. reorder_for_locality, build_topology, prepare_surface, then coarsen_mesh;
+///  5. reorder_for_locality, build_topology, prepare_surface, the components too small for their
+///     clusters subdivided (refine_small_components), then coarsen_mesh;
 ///  6. with kSplitEdgesAuto, where the split surface's coarse mesh keeps defects, step 5 again on
 ///     the mesh split but for the components that had them, then (defects remaining) on the unsplit
 ///     mesh; the result with the fewest defects is kept (ties: the more split one; see jobs);

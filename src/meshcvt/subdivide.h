@@ -28,6 +28,27 @@ namespace meshcvt {
 /// vertices (32-bit indices).
 Mesh subdivide_midpoint(const Mesh& mesh, unsigned levels);
 
+/// What subdivide_faces made.
+struct SubdividedFaces {
+  Mesh mesh;                     ///< input vertices keep their ids, midpoints follow
+  std::vector<uint32_t> parent;  ///< per output face: the input face it lies in
+};
+
+/// Midpoint subdivision (as subdivide_midpoint, `levels` times) of the selected faces only: the
+/// others are copied as they are. Meant for whole parts of a mesh that share no edge with the rest
+/// (a component too small for its clusters), so the result has no T-junction.
+///
+/// Input : mesh; selected: one entry per face (non-zero: subdivide it); levels >= 0.
+/// Output: faces in input order, each selected face replaced by its 4^levels children (in
+///         subdivide_midpoint's order, oriented as it), parent naming the input face of each;
+///         every input vertex kept with its id, the new midpoints after them. source_polygon
+///         follows the faces (the input face id where the input has none). The area, orientation
+///         and Euler characteristic are kept.
+/// Throws OptionError when the sizes disagree, an index is out of range, a selected face shares
+/// an edge with a face that is not selected (the split would leave a T-junction), or the result
+/// is beyond 32-bit indices.
+SubdividedFaces subdivide_faces(const Mesh& mesh, const std::vector<uint8_t>& selected, unsigned levels);
+
 /// The smallest k >= 0 such that faces * 4^k >= clusters * min_faces_per_cluster, i.e. how many
 /// subdivision levels give every cluster at least `min_faces_per_cluster` faces on average.
 /// Throws OptionError when min_faces_per_cluster is negative, NaN or infinite, or when faces is 0

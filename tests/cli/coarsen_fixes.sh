@@ -218,6 +218,38 @@ grep -Eq "note: .*fin.off: [12] non-manifold edges? \(three faces or more\): the
 "$cli" coarsen "$data/elephant.off" -n 100 -o "$tmp/plain-out.off" --device cpu --no-error >"$tmp/out" 2>"$tmp/err"
 grep -q "non-manifold" "$tmp/err" && fail "non-manifold note for the plain elephant: $(cat "$tmp/err")"
 
+# A lone triangle beside the elephant (a disk of one face needs 3 clusters): that part is
+# subdivided, with a note, instead of the mesh being refused; the report counts it.
+python3 - "$data/elephant.off" "$tmp/lone.off" <<'PY'
+import sys
+tok = open(sys.argv[1]).read().split()
+nv, nf = int(tok[1]), int(tok[2])
+body = tok[4:]
+with open(sys.argv[2], 'w') as out:
+    out.write(f"OFF\n{nv + 3} {nf + 1} 0\n")
+    for i in range(nv):
+        out.write(' '.join(body[3 * i:3 * i + 3]) + '\n')
+    out.write("3 0 0\n3.2 0 0\n3 0.2 0\n")
+    for k in range(nf):
+        out.write(' '.join(body[3 * nv + 4 * k:3 * nv + 4 * k + 4]) + '\n')
+    out.write(f"3 {nv} {nv + 1} {nv + 2}\n")
+PY
+"$cli" coarsen "$tmp/lone.off" -n 100 -o "$tmp/lone-out.off" --device cpu --no-error --report "$tmp/lone.json" \
+  >"$tmp/out" 2>"$tmp/err" || fail "lone triangle: $(cat "$tmp/err")"
+grep -q "note: .*lone.off: subdivided 1 component with fewer faces than the clusters it needs" "$tmp/err" ||
+  fail "no note on the subdivided component: $(cat "$tmp/err")"
+python3 - "$tmp/lone.json" "$tmp/lone-out.off" <<'PY' || fail "lone triangle: report or output"
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r['refined_components'] == 1, r['refined_components']
+tok = open(sys.argv[2]).read().split()
+assert int(tok[1]) == 100, tok[1]
+PY
+python3 - "$tmp/e50.json" <<'PY' || fail "refined_components in the plain elephant's report"
+import json, sys
+assert json.load(open(sys.argv[1]))['refined_components'] == 0
+PY
+
 # n too small for a genus-3 surface (Heawood: 10 vertices at least): exit 2, numbers named, no output
 set +e
 "$cli" coarsen "$data/elephant.off" -n 9 -o "$tmp/small.off" --device cpu >"$tmp/out" 2>"$tmp/err"
