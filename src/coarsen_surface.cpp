@@ -88,10 +88,21 @@ uint64_t edges_longer_than(WorkerPool& pool, const Mesh& mesh, double length, co
 }
 
 // Per-face values of a split mesh from those of the faces they came from (empty stays empty).
-std::vector<float> inherited(const std::vector<float>& values, const std::vector<uint32_t>& parent) {
+template <typename T>
+std::vector<T> inherited(const std::vector<T>& values, const std::vector<uint32_t>& parent) {
   if (values.empty()) return {};
-  std::vector<float> out(parent.size());
+  std::vector<T> out(parent.size());
   for (size_t f = 0; f < out.size(); ++f) out[f] = values[parent[f]];
+  return out;
+}
+
+// Per-face values of a mesh subdivided `levels` times from those of its faces (children of face f
+// are [f 4^levels, (f + 1) 4^levels); empty stays empty).
+template <typename T>
+std::vector<T> to_children(const std::vector<T>& values, unsigned levels) {
+  if (values.empty() || levels == 0) return values;
+  std::vector<T> out(values.size() << (2 * levels));
+  for (size_t f = 0; f < out.size(); ++f) out[f] = values[f >> (2 * levels)];
   return out;
 }
 
@@ -212,6 +223,7 @@ uint32_t refine_small_components(Mesh& m, Topology& topology, std::vector<float>
 // refine_small_components, and coarsen_mesh.
 struct JobRun {
   Mesh surface;
+  std::vector<uint32_t> origin;  // per surface face: the face of the mesh given to coarsen_surface
   LocalityOrder order;  // face i of the mesh given to run_job, reordered, is face order.face_of[i] of it
   std::vector<uint32_t> refine_parent;  // surface face -> reordered face (empty: none refined)
   uint32_t refined_components = 0;
@@ -223,12 +235,15 @@ struct JobRun {
   double order_seconds = 0;
 };
 
-JobRun run_job(Mesh m, const std::vector<float>& d, const CoarsenSurfaceOptions& options, bool prepare) {
+// origin: per face of m, the face of the mesh given to coarsen_surface.
+JobRun run_job(Mesh m, const std::vector<float>& d, const std::vector<uint32_t>& origin,
+               const CoarsenSurfaceOptions& options, bool prepare) {
   JobRun run;
   const auto start = Clock::now();
   run.order = reorder_for_locality(m);
   CoarsenMeshOptions job = options.job;
   run.density = to_reordered(d, run.order);
+  run.origin = run.order.identity() ? origin : inherited(origin, run.order.face_of);
   run.order_seconds = seconds_since(start);
   run.topology = build_topology(m);
   if (prepare) {
@@ -237,6 +252,7 @@ JobRun run_job(Mesh m, const std::vector<float>& d, const CoarsenSurfaceOptions&
   }
   if (options.refine_small_components)
     run.refined_components = refine_small_components(m, run.topology, run.density, run.refine_parent);
+  if (!run.refine_parent.empty()) run.origin = inherited(run.origin, run.refine_parent);
   job.cluster.density = run.density;  // coarsen_mesh weighs both the clusters and the dual with it
   run.job = coarsen_mesh(m, run.topology, job);
   run.surface = std::move(m);
@@ -309,9 +325,19 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
   auto t0 = Clock::now();
   // Faces with a repeated corner (welding a sliver leaves them) have no area and no edges: left out
   // here, as coarsen_mesh would leave them out, so that every count below is of the surface.
+  result.given_faces = mesh.face_count();
+  // Per face of `mesh`, at each step below: the face of the mesh given that it is or lies in (only
+  // where asked for: empty, every step leaves it empty).
+  std::vector<uint32_t> origin;
   {
     std::vector<uint32_t> kept_index;
-    result.collapsed_faces = remove_collapsed_faces(mesh, density.empty() ? nullptr : &kept_index);
+    const bool keep_index = options.keep_surface_origin || !density.empty();
+    result.collapsed_faces = remove_collapsed_faces(mesh, keep_index ? &kept_index : nullptr);
+    if (options.keep_surface_origin) {
+      origin.resize(mesh.face_count());
+      for (size_t f = 0; f < kept_index.size(); ++f)
+        if (kept_index[f] != kNone) origin[kept_index[f]] = uint32_t(f);
+    }
     if (result.collapsed_faces > 0 && !density.empty()) {
       std::vector<float> kept(mesh.face_count());
       for (size_t f = 0; f < kept_index.size(); ++f)
@@ -341,12 +367,8 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
           : unsigned(subdivide);
   if (result.subdivision_levels > 0) {
     mesh = subdivide_midpoint(mesh, result.subdivision_levels);
-    if (!density.empty()) {
-      // Children of face f are [f 4^k, (f + 1) 4^k).
-      std::vector<float> fine(mesh.face_count());
-      for (size_t f = 0; f < fine.size(); ++f) fine[f] = density[f >> (2 * result.subdivision_levels)];
-      density = std::move(fine);
-    }
+    origin = to_children(origin, result.subdivision_levels);
+    density = to_children(density, result.subdivision_levels);
   }
   result.subdivided_faces = mesh.face_count();
 
@@ -366,7 +388,7 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
   // faces, for the fallbacks below.
   Mesh unsplit;
   std::vector<float> unsplit_density;
-  std::vector<uint32_t> split_parent;
+  std::vector<uint32_t> unsplit_origin, split_parent;
   // The split's limit on face f of a mesh whose density is d: 1 / ratio of the coarse edge there.
   auto limit_of = [&](const std::vector<float>& d, size_t f) {
     return edge_length_at(result.coarse_edge_length, d, f) / ratio;
@@ -384,9 +406,11 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
       if (auto_split) {
         unsplit = mesh;
         unsplit_density = density;
+        unsplit_origin = origin;
         split_parent = split.parent;
       }
       density = inherited(density, split.parent);
+      origin = inherited(origin, split.parent);
       mesh = std::move(split.mesh);
     }
   }
@@ -398,7 +422,7 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
                       " faces of the input: ask for fewer, or subdivide it first (--subdivide auto, kSubdivideAuto)");
 
   const bool prepare = options.gradation == 0;
-  JobRun run = run_job(std::move(mesh), density, options, prepare);
+  JobRun run = run_job(std::move(mesh), density, origin, options, prepare);
   // Where the coarse mesh keeps defects, other surfaces are tried, each kept only if its coarse
   // mesh has fewer defects than the best so far (result.jobs lists them).
   JobRun as_given;  // the input as given's job, where it ran after a split and was not kept
@@ -429,7 +453,8 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
       SplitEdgesResult partial = split_long_edges(unsplit, 1.0, partial_limit);
       if (partial.split_edges > 0 && partial.mesh.face_count() >= n) {
         const uint64_t partial_edges = partial.split_edges;
-        if (keep_if_better(run_job(std::move(partial.mesh), inherited(unsplit_density, partial.parent), options, prepare),
+        if (keep_if_better(run_job(std::move(partial.mesh), inherited(unsplit_density, partial.parent),
+                                   inherited(unsplit_origin, partial.parent), options, prepare),
                            CoarsenSurfaceJob::partly_split)) {
           result.split_edges = partial_edges;
           result.unsplit_components = broken.components;
@@ -437,7 +462,7 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
       }
     }
     if (run.job.defects_remain) {
-      JobRun plain = run_job(std::move(unsplit), unsplit_density, options, prepare);
+      JobRun plain = run_job(std::move(unsplit), unsplit_density, unsplit_origin, options, prepare);
       if (keep_if_better(std::move(plain), CoarsenSurfaceJob::as_given)) {
         result.split_discarded = true;
         result.split_ratio = 0;
@@ -456,12 +481,10 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
   const JobRun& base = as_given.surface.face_count() > 0 ? as_given : run;
   if (run.job.defects_remain && options.subdivide == kSubdivideByPlacement && options.retry_subdivided &&
       base.surface.face_count() <= kMaxRetryFaces) {
-    std::vector<float> fine;  // its density (reordered with its surface), to the children
-    if (!base.density.empty()) {
-      fine.resize(4 * base.density.size());
-      for (size_t f = 0; f < fine.size(); ++f) fine[f] = base.density[f >> 2];
-    }
-    if (keep_if_better(run_job(subdivide_midpoint(base.surface, 1), fine, options, prepare), CoarsenSurfaceJob::subdivided)) {
+    // Its density and origins (reordered with its surface), to the children.
+    if (keep_if_better(run_job(subdivide_midpoint(base.surface, 1), to_children(base.density, 1),
+                               to_children(base.origin, 1), options, prepare),
+                       CoarsenSurfaceJob::subdivided)) {
       result.retried_subdivided = true;
       if (&base == &as_given) {  // (else the surface subdivided is the one kept, split as it was)
         result.split_discarded = true;
@@ -484,10 +507,71 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
     result.prepared_faces = run.prepared_faces;
   }
   result.refined_components = run.refined_components;
+  result.surface_origin = std::move(run.origin);
   result.surface = std::move(run.surface);
   result.topology = std::move(run.topology);
   result.job = std::move(run.job);
   return result;
+}
+
+std::vector<uint32_t> input_face_clusters(const Mesh& given, const CoarsenSurfaceResult& result) {
+  const size_t faces = given.face_count();
+  if (faces != result.given_faces)
+    throw OptionError("input_face_clusters: the mesh has " + std::to_string(faces) + " faces, the coarsening was of " +
+                      std::to_string(result.given_faces));
+  const std::vector<uint32_t>& origin = result.surface_origin;
+  const std::vector<uint32_t>& labels = result.job.clustering.labels;
+  if (origin.empty() && faces > 0)
+    throw OptionError("input_face_clusters: the result has no surface_origin: run coarsen_surface with "
+                      "keep_surface_origin set");
+  if (origin.size() != result.surface.face_count() || labels.size() != origin.size())
+    throw OptionError("input_face_clusters: the result's surface, origins and labels disagree");
+  // Faces kept (no repeated corner) in order, as remove_collapsed_faces numbered them.
+  std::vector<uint32_t> kept_index(faces, kNone);
+  uint32_t kept = 0;
+  for (size_t f = 0; f < faces; ++f) {
+    const uint32_t* t = &given.indices[3 * f];
+    if (!(t[0] == t[1] || t[1] == t[2] || t[0] == t[2])) kept_index[f] = kept++;
+  }
+  // Pieces per face of the mesh given: one where it was clustered as it is.
+  std::vector<uint32_t> pieces(faces, 0);
+  for (uint32_t f : origin) {
+    if (f >= faces || kept_index[f] == kNone)
+      throw OptionError("input_face_clusters: the result's origins are not faces of this mesh");
+    ++pieces[f];
+  }
+  std::vector<uint32_t> kept_labels(kept, 0);
+  bool split = false;
+  for (size_t i = 0; i < origin.size(); ++i) {
+    if (pieces[origin[i]] > 1) split = true;
+    kept_labels[kept_index[origin[i]]] = labels[i];
+  }
+  if (split) {
+    // (face, cluster, area) of every piece, summed per face and cluster; the largest sum wins.
+    struct Piece {
+      uint32_t face, cluster;
+      double area;
+    };
+    std::vector<Piece> all(origin.size());
+    for (size_t i = 0; i < origin.size(); ++i) all[i] = {origin[i], labels[i], face_area(result.surface, i)};
+    std::sort(all.begin(), all.end(), [](const Piece& x, const Piece& y) {
+      return x.face != y.face ? x.face < y.face : x.cluster < y.cluster;
+    });
+    for (size_t i = 0; i < all.size();) {
+      const uint32_t f = all[i].face;
+      double best = -1;
+      uint32_t best_cluster = 0;
+      while (i < all.size() && all[i].face == f) {
+        const uint32_t c = all[i].cluster;
+        double sum = 0;
+        for (; i < all.size() && all[i].face == f && all[i].cluster == c; ++i) sum += all[i].area;
+        if (sum > best) best = sum, best_cluster = c;  // strictly: ties keep the lower id
+      }
+      kept_labels[kept_index[f]] = best_cluster;
+    }
+  }
+  if (kept == faces) return kept_labels;
+  return labels_with_collapsed_faces(given, build_topology(given), kept_index, kept_labels, 0);
 }
 
 const char* to_string(CoarsenSurfaceJob::Surface s) {

@@ -492,3 +492,125 @@ TEST_CASE("coarsen_surface: a component with fewer faces than it needs clusters 
     CHECK_MESSAGE(std::string(e.what()).find("comes apart") != std::string::npos, e.what());
   }
 }
+
+namespace {
+
+// Checks result.surface_origin against the mesh given from outside: every surface face names a
+// face of `given`, and the pieces of each given face add up to its area (so they are its pieces).
+void check_origin(const Mesh& given, const CoarsenSurfaceResult& r) {
+  REQUIRE(r.given_faces == given.face_count());
+  REQUIRE(r.surface_origin.size() == r.surface.face_count());
+  std::vector<double> area(given.face_count(), 0.0);
+  for (size_t i = 0; i < r.surface_origin.size(); ++i) {
+    REQUIRE(r.surface_origin[i] < given.face_count());
+    area[r.surface_origin[i]] += face_area(r.surface, i);
+  }
+  for (size_t f = 0; f < given.face_count(); ++f) CHECK(area[f] == doctest::Approx(face_area(given, f)).epsilon(1e-5));
+}
+
+CoarsenSurfaceOptions tracked(uint32_t n) {
+  CoarsenSurfaceOptions o = with_n(n);
+  o.keep_surface_origin = true;
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("input_face_clusters: the coarse vertex of every input face, as clustered, subdivided, split or collapsed") {
+  // As given (no split, no reorder below 2^18 faces): the clustering's own labels.
+  const Mesh sphere = test::icosphere(3);
+  const CoarsenSurfaceResult plain = coarsen_surface(sphere, tracked(40));
+  check_origin(sphere, plain);
+  CHECK(input_face_clusters(sphere, plain) == plain.job.clustering.labels);
+
+  // Subdivided once: children 4f..4f+3 of face f have equal areas (to float rounding), so f takes
+  // a label that most of them have (two and two: either, as their rounded areas decide).
+  CoarsenSurfaceOptions once = tracked(40);
+  once.subdivide = 1;
+  const CoarsenSurfaceResult sub = coarsen_surface(sphere, once);
+  check_origin(sphere, sub);
+  const std::vector<uint32_t> labels = input_face_clusters(sphere, sub);
+  REQUIRE(labels.size() == sphere.face_count());
+  size_t mixed = 0;
+  for (size_t f = 0; f < sphere.face_count(); ++f) {
+    const uint32_t* child = &sub.job.clustering.labels[4 * f];
+    long best_count = 0;
+    for (int k = 0; k < 4; ++k) best_count = std::max(best_count, long(std::count(child, child + 4, child[k])));
+    CHECK(std::count(child, child + 4, labels[f]) == best_count);
+    mixed += best_count < 4;
+  }
+  CHECK(mixed > 0);  // some faces straddle a border: the majority rule was exercised
+
+  // Split (the CAD cylinder's long faces): every face's pieces are found, and its label is that of
+  // at least one of them; every cluster id is below n.
+  const Mesh cylinder = cad_cylinder();
+  const CoarsenSurfaceResult split = coarsen_surface(cylinder, tracked(60));
+  REQUIRE(split.split_edges > 0);
+  check_origin(cylinder, split);
+  const std::vector<uint32_t> cyl = input_face_clusters(cylinder, split);
+  REQUIRE(cyl.size() == cylinder.face_count());
+  for (size_t f = 0; f < cylinder.face_count(); ++f) {
+    CHECK(cyl[f] < 60);
+    bool found = false;
+    for (size_t i = 0; i < split.surface_origin.size() && !found; ++i)
+      found = split.surface_origin[i] == f && split.job.clustering.labels[i] == cyl[f];
+    CHECK(found);
+  }
+
+  // Collapsed faces (after the sphere's): each takes the label of the lowest face at its lowest corner.
+  const Mesh with = test::with_collapsed_faces(sphere, 5, 61);
+  const CoarsenSurfaceResult rc = coarsen_surface(with, tracked(40));
+  REQUIRE(rc.collapsed_faces == 5);
+  check_origin(with, rc);
+  const std::vector<uint32_t> lc = input_face_clusters(with, rc);
+  CHECK(lc == test::labels_at_lowest_corners(with, rc.job.clustering.labels));
+
+  // A lone triangle subdivided for its clusters: its 4 pieces name it.
+  Mesh lone = sphere;
+  const uint32_t a = test::add_vertex(lone, 3, 0, 0), b = test::add_vertex(lone, 3.3, 0, 0), c = test::add_vertex(lone, 3, 0.3, 0);
+  test::add_triangle(lone, a, b, c);
+  const CoarsenSurfaceResult rl = coarsen_surface(lone, tracked(40));
+  REQUIRE(rl.refined_components == 1);
+  check_origin(lone, rl);
+  CHECK(input_face_clusters(lone, rl).size() == lone.face_count());
+
+  CHECK_THROWS_AS(input_face_clusters(cylinder, plain), OptionError);
+  // Without keep_surface_origin there is nothing to go by.
+  const CoarsenSurfaceResult untracked = coarsen_surface(sphere, with_n(40));
+  CHECK(untracked.surface_origin.empty());
+  CHECK(untracked.job.coarse.mesh.positions == plain.job.coarse.mesh.positions);
+  CHECK_THROWS_AS(input_face_clusters(sphere, untracked), OptionError);
+}
+
+TEST_CASE("input_face_clusters: the cluster with the largest area of a face's pieces, ties to the lower id") {
+  // One face of the mesh given, in pieces made by hand (a result as coarsen_surface would fill it).
+  Mesh given;
+  test::add_vertex(given, 0, 0, 0);
+  test::add_vertex(given, 4, 0, 0);
+  test::add_vertex(given, 0, 4, 0);
+  test::add_triangle(given, 0, 1, 2);
+  auto result_of = [&](const Mesh& pieces, std::vector<uint32_t> labels) {
+    CoarsenSurfaceResult r;
+    r.given_faces = 1;
+    r.surface = pieces;
+    r.surface_origin.assign(pieces.face_count(), 0);
+    r.job.clustering.labels = std::move(labels);
+    return r;
+  };
+  // Subdivided: three of the four equal children in cluster 2, the last (the middle one) in 5.
+  const Mesh four = subdivide_midpoint(given, 1);
+  CHECK(input_face_clusters(given, result_of(four, {2, 2, 2, 5})) == std::vector<uint32_t>{2});
+  CHECK(input_face_clusters(given, result_of(four, {5, 2, 2, 2})) == std::vector<uint32_t>{2});
+  // Two and two of equal area (exactly: the corners are small integers): the lower id.
+  CHECK(input_face_clusters(given, result_of(four, {9, 4, 9, 4})) == std::vector<uint32_t>{4});
+  // Two pieces split at (1, 3) on the long edge: areas 2 and 6; the larger wins whatever the order.
+  Mesh two = given;
+  const uint32_t m = test::add_vertex(two, 1, 3, 0);
+  two.indices = {0, 1, m, 0, m, 2};
+  CHECK(input_face_clusters(given, result_of(two, {7, 3})) == std::vector<uint32_t>{7});
+  CHECK(input_face_clusters(given, result_of(two, {3, 7})) == std::vector<uint32_t>{3});
+  // Origins that are not faces of the mesh given are refused.
+  CoarsenSurfaceResult bad = result_of(two, {3, 7});
+  bad.surface_origin[1] = 1;
+  CHECK_THROWS_AS(input_face_clusters(given, bad), OptionError);
+}

@@ -26,17 +26,6 @@ struct ClusterArgs {
   bool quiet = false, no_weld = false, no_accelerate = false;
 };
 
-std::string labels_text(const std::vector<uint32_t>& labels) {
-  std::string s;
-  s.reserve(labels.size() * 6);
-  char buf[16];
-  for (uint32_t l : labels) {
-    int n = std::snprintf(buf, sizeof buf, "%u\n", l);
-    s.append(buf, size_t(n));
-  }
-  return s;
-}
-
 void write_report(const ClusterArgs& a, const Mesh& mesh, const Clustering& c, const ReadStats& rs, double read_s,
                   double write_s) {
   Json j;

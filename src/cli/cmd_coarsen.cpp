@@ -25,7 +25,7 @@ namespace meshcvt::cli {
 namespace {
 
 struct CoarsenArgs {
-  std::string input, output, report, metric = "cvt", placement = "projected", device;
+  std::string input, output, labels, report, metric = "cvt", placement = "projected", device;
   uint32_t clusters = 0, fix_rounds = CoarsenMeshOptions{}.max_fix_rounds;
   uint32_t relax_passes = CoarsenOptions{}.relax_passes;
   uint32_t fit_passes = CoarsenOptions{}.fit_passes;
@@ -135,16 +135,22 @@ void run_coarsen(const CoarsenArgs& a) {
   ro.weld = !a.no_weld;
   Mesh input = read_mesh_noted(a.input, ro, a.quiet);
   double read_s = seconds(t0);
-  // Faces with a repeated corner are left out here already (coarsen_surface would), so that the
+  // Faces with a repeated corner are counted here (coarsen_surface leaves them out), so that the
   // messages about them name the file.
-  const uint64_t collapsed = remove_collapsed_faces(input);
-  if (input.face_count() == 0)
+  uint64_t collapsed = 0;
+  for (size_t f = 0; f < input.face_count(); ++f) {
+    const uint32_t* t = &input.indices[3 * f];
+    collapsed += t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
+  }
+  if (collapsed == input.face_count())
     throw FileError(a.input, "every face has a repeated corner index (no area): nothing to coarsen");
   if (collapsed > 0 && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s: left out %llu face%s with a repeated corner (no area)\n", a.input.c_str(),
                  (unsigned long long)collapsed, collapsed == 1 ? "" : "s");
 
-  CoarsenSurfaceResult result = coarsen_surface(std::move(input), so);
+  // --labels needs the input as read afterwards (input_face_clusters); otherwise it is moved in.
+  so.keep_surface_origin = !a.labels.empty();
+  CoarsenSurfaceResult result = coarsen_surface(a.labels.empty() ? std::move(input) : Mesh(input), so);
   const Mesh& mesh = result.surface;
   const Topology& topology = result.topology;
   const CoarsenMeshResult& job = result.job;
@@ -205,6 +211,7 @@ void run_coarsen(const CoarsenArgs& a) {
                  r.defects.size(), count_kinds(r.defects).c_str());
   t0 = Clock::now();
   write_mesh(a.output, r.mesh);
+  if (!a.labels.empty()) write_text_file(a.labels, labels_text(input_face_clusters(input, result)));
   double write_s = seconds(t0);
   TriangleQuality q = triangle_quality(r.mesh);
   Topology out_topology = build_topology(r.mesh);
@@ -220,7 +227,7 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("iterations", c.iterations).value("converged", c.converged);
     j.value("input_faces", uint64_t(result.input_faces)).value("split_vertices", prepared.split_vertices + job.split_vertices)
         .value("reoriented_faces", prepared.flipped_faces + job.reoriented_faces)
-        .value("collapsed_faces", collapsed + result.collapsed_faces + job.collapsed_faces)
+        .value("collapsed_faces", result.collapsed_faces + job.collapsed_faces)
         .value("subdivision_levels", result.subdivision_levels)
         .value("coarse_edge_length", result.coarse_edge_length).value("long_edges", result.long_edges)
         .value("split_edges_option", a.split_edges).value("split_edges_ratio", result.split_ratio)
@@ -355,6 +362,10 @@ const RegisterCommand reg(30, [](CLI::App& app) {
   sub->add_flag("--no-flips", a->no_flips, "keep the dual's triangles as built (no edge flips improving angles)");
   sub->add_flag("--no-weld", a->no_weld, "do not merge vertices with identical positions");
   sub->add_flag("--no-error", a->no_error, "skip measuring the distance to the input");
+  sub->add_option("--labels", a->labels,
+                  "also write the coarse vertex (cluster) of every input face, one per line, in the input's face "
+                  "order (polygons expanded into triangles in order); a face subdivided or split for the clustering "
+                  "takes the cluster holding most of its area");
   sub->add_option("--report", a->report, "write a JSON report (clustering, topology, quality, error, defects)");
   sub->add_flag("-q,--quiet", a->quiet, "print nothing on success");
   add_device_option(sub, a->device);

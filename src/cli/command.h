@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include <string>
+#include <vector>
 
 #include "meshcvt/cluster.h"
 #include "meshcvt/io.h"
@@ -21,6 +22,9 @@ struct RegisterCommand {
 
 /// True when stderr is a terminal (progress lines are shown only then).
 bool stderr_is_terminal();
+
+/// One id per line ("3\n"), the --labels file format of `cluster` and `coarsen`.
+std::string labels_text(const std::vector<uint32_t>& labels);
 
 /// Progress line on stderr ("\rPHASE iteration N moves M"), for ClusterOptions::progress when
 /// stderr is a terminal.

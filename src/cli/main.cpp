@@ -30,6 +30,17 @@ RegisterCommand::RegisterCommand(int order, void (*add)(CLI::App& app)) { regist
 
 bool stderr_is_terminal() { return isatty(STDERR_FILENO) == 1; }
 
+std::string labels_text(const std::vector<uint32_t>& labels) {
+  std::string s;
+  s.reserve(labels.size() * 6);
+  char buf[16];
+  for (uint32_t l : labels) {
+    int n = std::snprintf(buf, sizeof buf, "%u\n", l);
+    s.append(buf, size_t(n));
+  }
+  return s;
+}
+
 void print_progress(const ClusterProgress& p) {
   std::fprintf(stderr, "\r%-8s iteration %5u  moves %10llu", p.phase, p.iteration, (unsigned long long)p.moves);
   std::fflush(stderr);
