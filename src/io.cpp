@@ -506,11 +506,16 @@ Mesh read_mesh(const std::string& path, const ReadOptions& options, ReadStats* s
   }
 }
 
-void write_mesh(const std::string& path, const Mesh& mesh, const WriteOptions& options) {
+void check_mesh_format(const std::string& path) {
   const std::string ext = io::lower_extension(path);
   if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl") {
     throw FileError(path, "unknown mesh format '" + ext + "' (expected .obj, .off, .ply or .stl)");
   }
+}
+
+void write_mesh(const std::string& path, const Mesh& mesh, const WriteOptions& options) {
+  check_mesh_format(path);
+  const std::string ext = io::lower_extension(path);
   // A mesh that would produce an unreadable file is a caller bug; refuse before creating anything.
   if (mesh.positions.size() % 3 != 0 || mesh.indices.size() % 3 != 0) {
     throw OptionError("write_mesh: positions and indices must come in threes");

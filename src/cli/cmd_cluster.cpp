@@ -73,6 +73,7 @@ void run_cluster(const ClusterArgs& a) {
   if (progress)
     options.progress = print_progress;
 
+  check_mesh_format(a.output);  // before the work
   // Large meshes are clustered in an order with locality (mesh_order.h); outputs use the input's.
   InputMesh input = read_input(a.input, !a.no_weld, a.quiet);
   Mesh& mesh = input.mesh;

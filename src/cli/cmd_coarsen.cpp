@@ -25,7 +25,7 @@ namespace meshcvt::cli {
 namespace {
 
 struct CoarsenArgs {
-  std::string input, output, labels, report, metric = "cvt", placement = "projected", device;
+  std::string input, output, labels, partition, report, metric = "cvt", placement = "projected", device;
   uint32_t clusters = 0, fix_rounds = CoarsenMeshOptions{}.max_fix_rounds;
   uint32_t relax_passes = CoarsenOptions{}.relax_passes;
   uint32_t fit_passes = CoarsenOptions{}.fit_passes;
@@ -128,6 +128,8 @@ void run_coarsen(const CoarsenArgs& a) {
   so.job.max_fix_rounds = a.fix_rounds;
   // The count of long edges is for the note and the report; auto and R count them anyway.
   so.count_long_edges = !a.quiet || !a.report.empty();
+  check_mesh_format(a.output);
+  if (!a.partition.empty()) check_mesh_format(a.partition);
 
   prepare_allocator(a.input);
   auto t0 = Clock::now();
@@ -148,9 +150,11 @@ void run_coarsen(const CoarsenArgs& a) {
     std::fprintf(stderr, "meshcvt: note: %s: left out %llu face%s with a repeated corner (no area)\n", a.input.c_str(),
                  (unsigned long long)collapsed, collapsed == 1 ? "" : "s");
 
-  // --labels needs the input as read afterwards (input_face_clusters); otherwise it is moved in.
-  so.keep_surface_origin = !a.labels.empty();
-  CoarsenSurfaceResult result = coarsen_surface(a.labels.empty() ? std::move(input) : Mesh(input), so);
+  // --labels and --partition need the input as read afterwards (input_face_clusters); otherwise
+  // it is moved in.
+  const bool per_input_face = !a.labels.empty() || !a.partition.empty();
+  so.keep_surface_origin = per_input_face;
+  CoarsenSurfaceResult result = coarsen_surface(per_input_face ? Mesh(input) : std::move(input), so);
   const Mesh& mesh = result.surface;
   const Topology& topology = result.topology;
   const CoarsenMeshResult& job = result.job;
@@ -211,7 +215,15 @@ void run_coarsen(const CoarsenArgs& a) {
                  r.defects.size(), count_kinds(r.defects).c_str());
   t0 = Clock::now();
   write_mesh(a.output, r.mesh);
-  if (!a.labels.empty()) write_text_file(a.labels, labels_text(input_face_clusters(input, result)));
+  if (per_input_face) {
+    const std::vector<uint32_t> clusters = input_face_clusters(input, result);
+    if (!a.labels.empty()) write_text_file(a.labels, labels_text(clusters));
+    if (!a.partition.empty()) {
+      WriteOptions po;
+      po.face_labels = &clusters;
+      write_mesh(a.partition, input, po);
+    }
+  }
   double write_s = seconds(t0);
   TriangleQuality q = triangle_quality(r.mesh);
   Topology out_topology = build_topology(r.mesh);
@@ -366,6 +378,8 @@ const RegisterCommand reg(30, [](CLI::App& app) {
                   "also write the coarse vertex (cluster) of every input face, one per line, in the input's face "
                   "order (polygons expanded into triangles in order); a face subdivided or split for the clustering "
                   "takes the cluster holding most of its area");
+  sub->add_option("--partition", a->partition,
+                  "also write the input mesh with each face's coarse vertex id (as --labels) and colors (.ply)");
   sub->add_option("--report", a->report, "write a JSON report (clustering, topology, quality, error, defects)");
   sub->add_flag("-q,--quiet", a->quiet, "print nothing on success");
   add_device_option(sub, a->device);

@@ -21,6 +21,7 @@ struct SubdivideArgs {
 void run_subdivide(const SubdivideArgs& a) {
   using Clock = std::chrono::steady_clock;
   auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+  check_mesh_format(a.output);  // before the work
   ReadOptions ro;
   ro.weld = !a.no_weld;
   auto t0 = Clock::now();

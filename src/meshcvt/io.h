@@ -58,6 +58,10 @@ struct WriteOptions {
   bool ascii = false;
 };
 
+/// Throws FileError naming `path` unless its extension is one read_mesh and write_mesh know (.obj
+/// .off .ply .stl, any case): for a command to check its output names before the work.
+void check_mesh_format(const std::string& path);
+
 /// Writes a mesh; the format comes from the extension (.obj .off .ply .stl). The file is written to
 /// a temporary name beside `path` and renamed only when complete: a failure leaves no partial file.
 /// Text formats write 9 significant digits, so reading the file back gives the same floats.

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# CLI test of `meshcvt coarsen --labels FILE`: one coarse vertex id per input face, in the input's
+# CLI test of `meshcvt coarsen --labels FILE` and `--partition FILE.ply`: one coarse vertex id per input face, in the input's
 # face order, checked in Python from the files:
 # - the elephant -> 200: one line per face, ids below n, every id used, and each coarse vertex lies
 #   near the faces labelled with it (within a mean coarse edge of their centroid, half of them
 #   within a quarter; measured: 0.61 and 0.12 at most), so the ids are the output's vertex numbers;
-# - the same with --subdivide 1: still one line per input face (the clustered faces are 4x);
+# - the same with --subdivide 1: still one line per input face (the clustered faces are 4x), and
+#   --partition writes the input mesh with the same ids per face;
 # - an OBJ of quads: one line per triangle the quads expand into;
 # - faces with a repeated corner (left out of the clustering): a line each all the same.
 # usage: coarsen_labels.sh /path/to/meshcvt /path/to/tests/data
@@ -52,9 +53,27 @@ PY
 "$cli" coarsen "$data/elephant.off" -n 200 -o "$tmp/e.off" --labels "$tmp/e.txt" --device cpu --no-error -q ||
   fail "coarsen --labels failed"
 check "$data/elephant.off" "$tmp/e.off" "$tmp/e.txt" 200 1
-"$cli" coarsen "$data/elephant.off" -n 200 -o "$tmp/s.off" --labels "$tmp/s.txt" --subdivide 1 --device cpu --no-error -q ||
-  fail "coarsen --labels --subdivide 1 failed"
+"$cli" coarsen "$data/elephant.off" -n 200 -o "$tmp/s.off" --labels "$tmp/s.txt" --subdivide 1 --device cpu --no-error -q \
+  --partition "$tmp/s.ply" || fail "coarsen --labels --subdivide 1 failed"
 check "$data/elephant.off" "$tmp/s.off" "$tmp/s.txt" 200 1
+# --partition: the input mesh (its faces, in order) with the same ids as a per-face property.
+python3 - "$tmp/s.ply" "$tmp/s.txt" "$data/elephant.off" <<'PY' || fail "--partition does not match --labels"
+import struct, sys
+data = open(sys.argv[1], 'rb').read()
+end = data.index(b"end_header\n") + len(b"end_header\n")
+header = data[:end].decode().split("\n")
+nv = int(next(l for l in header if l.startswith("element vertex")).split()[2])
+nf = int(next(l for l in header if l.startswith("element face")).split()[2])
+assert "property int cluster" in header, header
+off = open(sys.argv[3]).read().split()
+assert nf == int(off[2]), (nf, off[2])
+pos, ids = end + 12 * nv, []
+for _ in range(nf):
+    k = data[pos]; pos += 1 + 4 * k
+    ids.append(struct.unpack_from("<i", data, pos)[0]); pos += 4 + 3
+assert pos == len(data)
+assert ids == [int(x) for x in open(sys.argv[2]).read().split()]
+PY
 
 # A 12 x 12 grid of quads in an OBJ: 288 triangles, so 288 lines.
 python3 - "$tmp/quads.obj" "$tmp/quads.off" <<'PY'

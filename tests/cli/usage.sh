@@ -45,4 +45,16 @@ grep -q -- "--no-weld" "$tmp/out" || fail "info --help does not mention --no-wel
 grep -q -- "--levels" "$tmp/out" || fail "subdivide --help does not mention --levels"
 "$cli" --version >"$tmp/out" 2>&1 || fail "--version: exit $?"
 grep -q "^meshcvt [0-9]" "$tmp/out" || fail "--version: $(cat "$tmp/out")"
+
+# An output name with an unknown extension is refused before any work: the message names the
+# output, not the input (which does not exist here), and the exit is 1 (a file error).
+for args in "cluster $tmp/missing.off -n 10 -o $tmp/o.xyz" "coarsen $tmp/missing.off -n 10 -o $tmp/o.xyz" \
+            "coarsen $tmp/missing.off -n 10 -o $tmp/o.off --partition $tmp/p.xyz" "subdivide $tmp/missing.off -k 1 -o $tmp/o.xyz"; do
+  # shellcheck disable=SC2086
+  "$cli" $args >"$tmp/out" 2>"$tmp/err"
+  rc=$?
+  [ $rc -eq 1 ] || fail "meshcvt $args: expected exit 1, got $rc"
+  grep -q "\.xyz: unknown mesh format '.xyz'" "$tmp/err" || fail "meshcvt $args: $(cat "$tmp/err")"
+  grep -q "missing.off" "$tmp/err" && fail "meshcvt $args: read the input first: $(cat "$tmp/err")"
+done
 echo "usage.sh: ok"
