@@ -15,7 +15,7 @@
 // computing vertex normals from facet normals", JGT 1999: e1 x e2 / (|e1|^2 |e2|^2) over the
 // corner's two edges), exact for vertices on a sphere, as in Rusinkiewicz's paper.
 //
-// Then: scale-free (times the bounding-box diagonal), smoothed twice over the faces around each
+// Then: scale-free (times the bounding-box diagonal), smoothed four times over the faces around each
 // face's vertices (area-weighted: a noisy or tiny face moves its neighbourhood little), mapped to
 // rho = (1 + c)^g relative to the smallest, clamped to a ratio bound (ACVD clamps at 100 x mean).
 //
@@ -41,6 +41,14 @@ namespace {
 // A face is too thin for a curvature fit when twice its area is below this fraction of its longest
 // edge squared (its smallest angle is then below about 1e-6 rad): the edges no longer span the plane.
 constexpr double kThinFace = 1e-6;
+// Passes of smoothing over vertex rings. With none, one noisy face makes its own tiny cluster. Two
+// (until the twenty-third session) let the density change faster than clusters can follow: at
+// --gradation 1, fandisk -> 1000 / bunny00 -> 500 / refined_elephant -> 1000 kept 31 / 13 / 59
+// angles below 30 degrees; four give 5 / 1 / 33 for an RMS distance 5% higher, 1% higher and 2.5%
+// lower. Over libcgal-demo at n = faces / 40, four also lower RMS (geometric mean 0.994x) and
+// angles below 30 (1829 -> 1481); at faces / 10 RMS is 1% higher, angles below 30 1486 -> 1342
+// (bench/RESULTS.md, "Coarsening: gradation and subdivision"). Six smooth away more of the gain.
+constexpr int kSmoothingPasses = 4;
 
 // [0, count) in up to two ranges: a second thread only pays off on large inputs.
 std::vector<uint32_t> split(size_t count) {
@@ -217,9 +225,8 @@ std::vector<float> curvedness(const Mesh& mesh, const Topology& topology) {
     }
   });
   vertex_normals = {};
-  // Two rings: one noisy face spreads over ~20 faces instead of making its own tiny cluster.
   std::vector<float> vertex_value(nv);
-  for (int pass = 0; pass < 2; ++pass) smooth_over_vertex_rings(mesh, topology, area, value, vertex_value);
+  for (int pass = 0; pass < kSmoothingPasses; ++pass) smooth_over_vertex_rings(mesh, topology, area, value, vertex_value);
   for (float& x : value)
     if (!(x >= 0)) x = 0;  // nothing known around it: treat as flat
   return value;

@@ -296,3 +296,31 @@ TEST_CASE("density: a density of all ones clusters as no density does") {
   CHECK(a.labels == b.labels);
   CHECK(a.generators == b.generators);
 }
+
+TEST_CASE("density: the curvedness of a crease spreads four vertex rings, and not beyond") {
+  // A 40 x 10 grid over [0, 2] x [0, 1] (columns 0.05 wide) folded along x = 1: only the faces
+  // touching the crease have a curvature of their own; four smoothing passes carry it four
+  // columns farther on each side (so the density changes no faster than clusters can follow), and
+  // faces beyond keep exactly 0.
+  Mesh m = test::grid(40, 10, 2, 1, 0);
+  for (size_t v = 0; v < m.vertex_count(); ++v) {
+    const double x = m.positions[3 * v];
+    if (x > 1) m.positions[3 * v + 2] = float(0.5 * (x - 1));
+  }
+  const std::vector<float> c = face_curvedness(m, build_topology(m));
+  // The largest c per column (by the face centroid's x).
+  std::vector<double> column(40, 0.0);
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    const int k = int(std::floor(centroid_x(m, f) / 0.05));
+    REQUIRE(k >= 0);
+    REQUIRE(k < 40);
+    column[k] = std::max(column[k], double(c[f]));
+  }
+  for (int k = 15; k < 25; ++k) CHECK_MESSAGE(column[k] > 0, "column " << k);  // crease at 20
+  for (int k = 0; k < 15; ++k) CHECK_MESSAGE(column[k] == 0, "column " << k);
+  for (int k = 25; k < 40; ++k) CHECK_MESSAGE(column[k] == 0, "column " << k);
+  // And so the density: exactly 1 away from it.
+  const std::vector<float> rho = density(m, 1);
+  CHECK(mean_in(m, rho, 0, 0.7) == 1.0);
+  CHECK(mean_in(m, rho, 0.75, 0.8) > 1.0);
+}

@@ -31,7 +31,8 @@ inline constexpr double kDefaultMaxDensityRatio = 256;
 /// in 1 / input units) times the bounding-box diagonal of the referenced vertices, so it has no
 /// unit and does not change when the mesh is scaled: a sphere gives c = diagonal / radius (about
 /// 3.46 for a whole sphere), a cylinder diagonal / (sqrt(2) radius), a plane 0. c is averaged over
-/// the faces within two vertex rings (area-weighted), so one noisy face cannot make a tiny cluster.
+/// the faces within four vertex rings (area-weighted, in four passes), so one noisy face cannot
+/// make a tiny cluster and the density changes no faster than clusters can follow.
 /// A face where the curvature cannot be estimated (zero area, a sliver) takes its neighbours'
 /// value, or 0 when none has one. A flat mesh, or one whose faces are all degenerate, gives all
 /// ones. Sharp creases count as curved: their c grows with the input's resolution near the crease
@@ -56,7 +57,7 @@ inline constexpr double kDefaultMaxDensityRatio = 256;
 std::vector<float> curvature_density(const Mesh& mesh, const Topology& topology, double gradation,
                                      double max_ratio = kDefaultMaxDensityRatio);
 
-/// Per-face scale-free curvedness c_k (see curvature_density), after the two-ring smoothing.
+/// Per-face scale-free curvedness c_k (see curvature_density), after the four-ring smoothing.
 /// Same inputs and errors as curvature_density (without the mapping). Exposed for measurements
 /// and tests: curvature_density(mesh, topology, g) maps it as above.
 std::vector<float> face_curvedness(const Mesh& mesh, const Topology& topology);
