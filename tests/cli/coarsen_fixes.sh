@@ -220,20 +220,7 @@ grep -q "non-manifold" "$tmp/err" && fail "non-manifold note for the plain eleph
 
 # A lone triangle beside the elephant (a disk of one face needs 3 clusters): that part is
 # subdivided, with a note, instead of the mesh being refused; the report counts it.
-python3 - "$data/elephant.off" "$tmp/lone.off" <<'PY'
-import sys
-tok = open(sys.argv[1]).read().split()
-nv, nf = int(tok[1]), int(tok[2])
-body = tok[4:]
-with open(sys.argv[2], 'w') as out:
-    out.write(f"OFF\n{nv + 3} {nf + 1} 0\n")
-    for i in range(nv):
-        out.write(' '.join(body[3 * i:3 * i + 3]) + '\n')
-    out.write("3 0 0\n3.2 0 0\n3 0.2 0\n")
-    for k in range(nf):
-        out.write(' '.join(body[3 * nv + 4 * k:3 * nv + 4 * k + 4]) + '\n')
-    out.write(f"3 {nv} {nv + 1} {nv + 2}\n")
-PY
+off_with_extra "$data/elephant.off" "$tmp/lone.off" $'3 0 0\n3.2 0 0\n3 0.2 0' '3 +0 +1 +2'
 "$cli" coarsen "$tmp/lone.off" -n 100 -o "$tmp/lone-out.off" --device cpu --no-error --report "$tmp/lone.json" \
   >"$tmp/out" 2>"$tmp/err" || fail "lone triangle: $(cat "$tmp/err")"
 grep -q "note: .*lone.off: subdivided 1 component with fewer faces than the clusters it needs" "$tmp/err" ||

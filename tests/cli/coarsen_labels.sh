@@ -96,19 +96,7 @@ PY
 check "$tmp/quads.off" "$tmp/q.off" "$tmp/q.txt" 20 0
 
 # Two faces with a repeated corner after the elephant's: they get a line each, with an id in range.
-python3 - "$data/elephant.off" "$tmp/collapsed.off" <<'PY'
-import sys
-t = open(sys.argv[1]).read().split()
-nv, nf = int(t[1]), int(t[2])
-body = t[4:]
-with open(sys.argv[2], 'w') as out:
-    out.write(f"OFF\n{nv} {nf + 2} 0\n")
-    for i in range(nv):
-        out.write(' '.join(body[3 * i:3 * i + 3]) + '\n')
-    for k in range(nf):
-        out.write(' '.join(body[3 * nv + 4 * k:3 * nv + 4 * k + 4]) + '\n')
-    out.write("3 0 0 1\n3 5 6 6\n")
-PY
+off_with_extra "$data/elephant.off" "$tmp/collapsed.off" "" $'3 0 0 1\n3 5 6 6'
 "$cli" coarsen "$tmp/collapsed.off" -n 200 -o "$tmp/c.off" --labels "$tmp/c.txt" --device cpu --no-error -q ||
   fail "coarsen --labels with collapsed faces failed"
 faces=$(python3 -c "import sys; print(int(open(sys.argv[1]).read().split()[2]))" "$tmp/collapsed.off")

@@ -3,3 +3,25 @@
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
+# off_with_extra IN OUT VERTICES FACES: writes OUT, the OFF file IN (triangles only, no comments)
+# with the lines VERTICES ("x y z" each) after its vertices and FACES ("3 a b c" each) after its
+# faces; in FACES, "+k" stands for the k-th extra vertex (IN's vertex count + k).
+off_with_extra() {
+  python3 - "$@" <<'PY'
+import sys
+tok = open(sys.argv[1]).read().split()
+nv, nf = int(tok[1]), int(tok[2])
+body = tok[4:]
+verts = [l for l in sys.argv[3].splitlines() if l.strip()]
+faces = [' '.join(str(nv + int(t[1:])) if t.startswith('+') else t for t in l.split())
+         for l in sys.argv[4].splitlines() if l.strip()]
+with open(sys.argv[2], 'w') as out:
+    out.write(f"OFF\n{nv + len(verts)} {nf + len(faces)} 0\n")
+    for i in range(nv):
+        out.write(' '.join(body[3 * i:3 * i + 3]) + '\n')
+    out.writelines(v + '\n' for v in verts)
+    for k in range(nf):
+        out.write(' '.join(body[3 * nv + 4 * k:3 * nv + 4 * k + 4]) + '\n')
+    out.writelines(f + '\n' for f in faces)
+PY
+}
