@@ -117,11 +117,12 @@ constexpr unsigned kMaxComponentLevels = 6;
 
 // Each component of m with fewer faces than describe_components' minimum (a lone triangle needs
 // 3 clusters, a closed pair of faces 4) midpoint-subdivided until it has at least that many
-// faces, with every component that shares an edge with it (a non-manifold edge), so that coarsen_mesh can give it its clusters instead of refusing the
-// mesh (assimp-testmodels' box_longline.obj, libcgal-demo's b9_mesh: lone triangles). The rest of
-// m is untouched. density (per face, may be empty) follows; parent: per face of the new m, its
+// faces, with every component that shares an edge with it (a non-manifold edge), so that
+// coarsen_mesh can give it its clusters instead of refusing the mesh (libcgal-demo's b9_mesh:
+// lone triangles). The rest of m is untouched. density (per face, may be empty) follows; parent: per face of the new m, its
 // face in the m given (left empty when nothing is refined). topology is rebuilt when m changes.
-// Returns the number of components refined.
+// Returns the number of components that were too small (not counting those refined with them);
+// throws OptionError where subdividing does not give a component room (see the end).
 uint32_t refine_small_components(Mesh& m, Topology& topology, std::vector<float>& density,
                                  std::vector<uint32_t>& parent) {
   const uint32_t nc = topology.component_count;
@@ -262,7 +263,6 @@ JobRun run_job(Mesh m, const std::vector<float>& d, const std::vector<uint32_t>&
 double seconds_of(const JobRun& run) {
   return run.order_seconds + run.job.cluster_seconds + run.job.fix_seconds + run.job.coarsen_seconds;
 }
-
 
 // The components of a job's surface that hold a cluster a defect names, as faces of the mesh the
 // surface was split from (parent: split face -> face of that mesh). A split keeps components (the

@@ -587,9 +587,10 @@ struct CoarsenSurfaceResult {
 ///         CoarsenSurfaceResult; lengths in the input's units, times in seconds.
 /// Guarantees: those of coarsen_mesh, on the result's surface. Deterministic for any thread count.
 /// Throws OptionError on options out of range (gradation, subdivide, split_edges, a density of the
-/// wrong size or with a gradation) and when n is larger than the faces and nothing subdivides;
-/// Error when every face is collapsed; and what coarsen_mesh, subdivide_midpoint and
-/// split_long_edges throw.
+/// wrong size or with a gradation), when n is larger than the faces and nothing subdivides, and
+/// when a component too small for its clusters still has parts too small once subdivided (faces
+/// on the same corners come apart at non-manifold edges); Error when every face is collapsed; and
+/// what coarsen_mesh, subdivide_midpoint and split_long_edges throw.
 CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& options);
 
 /// The coarse vertex (= cluster) of every face of the mesh given to coarsen_surface: what a caller
