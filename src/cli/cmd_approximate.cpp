@@ -137,7 +137,7 @@ void run_approximate(ApproximateArgs& a) {
   const Mesh& mesh = input.mesh;
   const LocalityOrder& order = input.order;
   Topology topology = build_topology(mesh);
-  ShapeApproximation s = approximate_shape(mesh, topology, options);
+  ShapeApproximation s = naming_input(a.input, [&] { return approximate_shape(mesh, topology, options); });
   if (progress) std::fprintf(stderr, "\r%60s\r", "");
   if (!s.clustering.device_notice.empty() && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s\n", s.clustering.device_notice.c_str());

@@ -91,7 +91,7 @@ void run_cluster(const ClusterArgs& a) {
       prepare_surface(prepared, prepared_topology);
       options.density = curvature_density(prepared, prepared_topology, a.gradation);
     }
-    c = cluster(mesh, topology, options);
+    c = naming_input(a.input, [&] { return cluster(mesh, topology, options); });
     if (topology.collapsed_faces < mesh.face_count()) collapsed = topology.collapsed_faces;
   }
   if (collapsed > 0 && !a.quiet)

@@ -154,7 +154,8 @@ void run_coarsen(const CoarsenArgs& a) {
   // it is moved in.
   const bool per_input_face = !a.labels.empty() || !a.partition.empty();
   so.keep_surface_origin = per_input_face;
-  CoarsenSurfaceResult result = coarsen_surface(per_input_face ? Mesh(input) : std::move(input), so);
+  CoarsenSurfaceResult result =
+      naming_input(a.input, [&] { return coarsen_surface(per_input_face ? Mesh(input) : std::move(input), so); });
   const Mesh& mesh = result.surface;
   const Topology& topology = result.topology;
   const CoarsenMeshResult& job = result.job;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "meshcvt/cluster.h"
+#include "meshcvt/error.h"
 #include "meshcvt/io.h"
 #include "meshcvt/mesh.h"
 #include "meshcvt/mesh_order.h"
@@ -49,6 +50,18 @@ struct InputMesh {
   double seconds = 0;  ///< reading and reordering
 };
 InputMesh read_input(const std::string& path, bool weld, bool quiet);
+
+/// fn(), with an OptionError it throws given `path: ` in front: a mesh that does not allow the
+/// options (n too small for its components, more clusters than faces) is named in the message, so
+/// that a run over many files says which one.
+template <class Fn>
+auto naming_input(const std::string& path, Fn&& fn) -> decltype(fn()) {
+  try {
+    return fn();
+  } catch (const OptionError& e) {
+    throw OptionError(path + ": " + e.what());
+  }
+}
 
 /// Appends the --device option (auto|cpu|gpu|gpu:N) to a subcommand.
 void add_device_option(CLI::App* sub, std::string& device);

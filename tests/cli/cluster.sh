@@ -86,6 +86,8 @@ cmp -s "$tmp/t1.txt" "$tmp/labels.txt" || fail "labels differ between 1 and defa
 grep -q "^meshcvt: error:" "$tmp/err" || fail "-n 0: no error line"
 "$meshcvt" cluster "$data/elephant.off" -n 99999999 -o "$tmp/bad.ply" 2>"$tmp/err"; rc=$?
 [ $rc -eq 2 ] || fail "-n too large: expected exit 2, got $rc"
+grep -q "^meshcvt: error: .*elephant.off: cannot make 99999999 clusters" "$tmp/err" ||
+  fail "-n too large: the message does not name the file: $(cat "$tmp/err")"
 grep -q "5558 faces" "$tmp/err" || fail "-n too large: message should name the face count: $(cat "$tmp/err")"
 "$meshcvt" cluster "$data/elephant.off" -n 10 --metric nonsense -o "$tmp/bad.ply" 2>"$tmp/err"; rc=$?
 [ $rc -eq 2 ] || fail "bad metric: expected exit 2, got $rc"

@@ -237,13 +237,15 @@ import json, sys
 assert json.load(open(sys.argv[1]))['refined_components'] == 0
 PY
 
-# n too small for a genus-3 surface (Heawood: 10 vertices at least): exit 2, numbers named, no output
+# n too small for a genus-3 surface (Heawood: 10 vertices at least): exit 2, the file and numbers
+# named, no output
 set +e
 "$cli" coarsen "$data/elephant.off" -n 9 -o "$tmp/small.off" --device cpu >"$tmp/out" 2>"$tmp/err"
 code=$?
 set -e
 [ "$code" = 2 ] || fail "n = 9 gave exit $code: $(cat "$tmp/err")"
 grep -q "n = 9 is too small" "$tmp/err" || fail "message: $(cat "$tmp/err")"
+grep -q "elephant.off: coarsen: n = 9" "$tmp/err" || fail "the message does not name the file: $(cat "$tmp/err")"
 grep -q "at least 10" "$tmp/err" || fail "message: $(cat "$tmp/err")"
 [ ! -e "$tmp/small.off" ] || fail "an output was written for n = 9"
 echo "ok"
