@@ -90,6 +90,26 @@ void check_valid(const CoarsenSurfaceResult& r, uint32_t n) {
   CHECK(out.boundary_loops == in.boundary_loops);
 }
 
+
+// Checks result.surface_origin against the mesh given from outside: every surface face names a
+// face of `given`, and the pieces of each given face add up to its area (so they are its pieces).
+void check_origin(const Mesh& given, const CoarsenSurfaceResult& r) {
+  REQUIRE(r.given_faces == given.face_count());
+  REQUIRE(r.surface_origin.size() == r.surface.face_count());
+  std::vector<double> area(given.face_count(), 0.0);
+  for (size_t i = 0; i < r.surface_origin.size(); ++i) {
+    REQUIRE(r.surface_origin[i] < given.face_count());
+    area[r.surface_origin[i]] += face_area(r.surface, i);
+  }
+  for (size_t f = 0; f < given.face_count(); ++f) CHECK(area[f] == doctest::Approx(face_area(given, f)).epsilon(1e-5));
+}
+
+CoarsenSurfaceOptions tracked(uint32_t n) {
+  CoarsenSurfaceOptions o = with_n(n);
+  o.keep_surface_origin = true;
+  return o;
+}
+
 }  // namespace
 
 TEST_CASE("coarsen_surface: a CAD-like cylinder's long edges are split first, and its triangles come out better") {
@@ -217,6 +237,44 @@ TEST_CASE("coarsen_surface: a component that keeps defects split is left as give
   off.split_edges = 0;
   const CoarsenSurfaceResult as_given = coarsen_surface(both, off);
   CHECK(triangle_quality(r.job.coarse.mesh).q_avg > triangle_quality(as_given.job.coarse.mesh).q_avg + 0.05);
+}
+
+TEST_CASE("coarsen_surface: the partial fallback finds the broken component past a subdivided lone triangle") {
+  // As above, with ten lone triangles first and the strip next: the triangles are subdivided in
+  // every job (30 faces more before all the others), so the split surface's broken component (the
+  // strip) is found only through the subdivision's parents, and the strip alone is left as given.
+  Mesh lone;
+  for (uint32_t i = 0; i < 10; ++i) {
+    const uint32_t a = test::add_vertex(lone, -10, i, 0), b = test::add_vertex(lone, -9.7, i, 0),
+                   c = test::add_vertex(lone, -10, i + 0.3, 0);
+    test::add_triangle(lone, a, b, c);
+  }
+  const Mesh all = test::combine(test::combine(lone, strip(10, 2, 0.5), 0), cad_cylinder(), 0);
+  const uint32_t n = 90;
+  const CoarsenSurfaceResult r = coarsen_surface(all, tracked(n));
+  REQUIRE(r.jobs.size() == 2);
+  CHECK(r.jobs[0].defects > 0);
+  CHECK(r.jobs[1].surface == CoarsenSurfaceJob::partly_split);
+  CHECK(r.jobs[1].defects == 0);
+  CHECK(r.jobs[1].kept);
+  CHECK(r.unsplit_components == 1);
+  CHECK(r.refined_components == 10);
+  check_valid(r, n);
+  check_origin(all, r);
+  // The strip's 20 triangles as they were, each lone triangle in 4.
+  size_t strip_faces = 0, lone_faces = 0;
+  for (size_t f = 0; f < r.surface.face_count(); ++f) {
+    bool on_strip = true, on_lone = true;
+    for (int k = 0; k < 3; ++k) {
+      const float* p = &r.surface.positions[3 * size_t(r.surface.indices[3 * f + k])];
+      on_strip = on_strip && p[0] >= 3 && p[2] == 0;
+      on_lone = on_lone && p[0] <= -9;
+    }
+    strip_faces += on_strip;
+    lone_faces += on_lone;
+  }
+  CHECK(strip_faces == 20);
+  CHECK(lone_faces == 40);
 }
 
 TEST_CASE("coarsen_surface: where defects remain, the input subdivided once is tried and kept if it has fewer") {
@@ -493,28 +551,6 @@ TEST_CASE("coarsen_surface: a component with fewer faces than it needs clusters 
   }
 }
 
-namespace {
-
-// Checks result.surface_origin against the mesh given from outside: every surface face names a
-// face of `given`, and the pieces of each given face add up to its area (so they are its pieces).
-void check_origin(const Mesh& given, const CoarsenSurfaceResult& r) {
-  REQUIRE(r.given_faces == given.face_count());
-  REQUIRE(r.surface_origin.size() == r.surface.face_count());
-  std::vector<double> area(given.face_count(), 0.0);
-  for (size_t i = 0; i < r.surface_origin.size(); ++i) {
-    REQUIRE(r.surface_origin[i] < given.face_count());
-    area[r.surface_origin[i]] += face_area(r.surface, i);
-  }
-  for (size_t f = 0; f < given.face_count(); ++f) CHECK(area[f] == doctest::Approx(face_area(given, f)).epsilon(1e-5));
-}
-
-CoarsenSurfaceOptions tracked(uint32_t n) {
-  CoarsenSurfaceOptions o = with_n(n);
-  o.keep_surface_origin = true;
-  return o;
-}
-
-}  // namespace
 
 TEST_CASE("input_face_clusters: the coarse vertex of every input face, as clustered, subdivided, split or collapsed") {
   // As given (no split, no reorder below 2^18 faces): the clustering's own labels.
