@@ -285,6 +285,7 @@ TEST_CASE("coarsen_surface: where defects remain, the input subdivided once is t
     no_retry.retry_subdivided = false;
     once.subdivide = 1;
     explicit_zero.subdivide = 0;
+    o.keep_surface_origin = true;  // (changes nothing else; checked below through the retry)
     const CoarsenSurfaceResult r = coarsen_surface(mesh, o);
     const CoarsenSurfaceResult plain = coarsen_surface(mesh, no_retry);
     const CoarsenSurfaceResult finer = coarsen_surface(mesh, once);
@@ -306,6 +307,7 @@ TEST_CASE("coarsen_surface: where defects remain, the input subdivided once is t
     CHECK(r.job.coarse.mesh.vertex_count() == o.job.cluster.clusters);
     if (b < a) CHECK(r.job.coarse.mesh.positions == finer.job.coarse.mesh.positions);
     CHECK(r.discarded_job_defects == int64_t(std::max(a, b)));
+    check_origin(mesh, r);
   };
   const Mesh elephant = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
   SUBCASE("the elephant without fix rounds") {
