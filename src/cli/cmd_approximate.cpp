@@ -19,7 +19,7 @@ namespace meshcvt::cli {
 namespace {
 
 struct ApproximateArgs {
-  std::string input, output, polygons, partition, report, device, chord_rule = "paper";
+  std::string input, output, polygons, partition, labels, report, device, chord_rule = "paper";
   uint32_t proxies = 0, max_iter = 1000;
   double max_error = -1, chord_error = kDefaultChordError;
   unsigned threads = 0;
@@ -154,13 +154,16 @@ void run_approximate(ApproximateArgs& a) {
   wo.face_labels = &s.triangle_regions;
   write_mesh(a.output, s.mesh, wo);
   if (!a.polygons.empty()) write_polygon_mesh(a.polygons, s.mesh.positions, s.polygon_offsets, s.polygon_vertices);
-  if (!a.partition.empty()) {
-    Mesh original = mesh;
-    restore_input_order(original, order);
+  if (!a.partition.empty() || !a.labels.empty()) {
     const std::vector<uint32_t> labels = to_input_order(s.labels, order);
-    WriteOptions po;
-    po.face_labels = &labels;
-    write_mesh(a.partition, original, po);
+    if (!a.labels.empty()) write_text_file(a.labels, labels_text(labels));
+    if (!a.partition.empty()) {
+      Mesh original = mesh;
+      restore_input_order(original, order);
+      WriteOptions po;
+      po.face_labels = &labels;
+      write_mesh(a.partition, original, po);
+    }
   }
   double write_s = std::chrono::duration<double>(Clock::now() - t0).count();
   if (!a.report.empty()) write_report(a, mesh, input.stats, s, input.seconds, write_s);
@@ -191,6 +194,9 @@ const RegisterCommand reg(40, [](CLI::App& app) {
       ->required();
   sub->add_option("--polygons", a->polygons, "also write the polygon mesh, one face per region (.obj or .off)");
   sub->add_option("--partition", a->partition, "also write the input mesh with per-face region ids (.ply)");
+  sub->add_option("--labels", a->labels,
+                  "also write the region id of every input face, one per line, in the input's face order (polygons "
+                  "expanded into triangles in order)");
   char chord_default[32];
   std::snprintf(chord_default, sizeof chord_default, "%g", kDefaultChordError);
   sub->add_option("--chord-error", a->chord_error,

@@ -12,10 +12,20 @@ source "$(dirname "$0")/prologue.bash"  # $tmp, fail
 py=python3
 [ -x /usr/bin/python3 ] && py=/usr/bin/python3
 
-# -n: triangle mesh (OFF), polygons (OBJ), partition (PLY) and report.
+# -n: triangle mesh (OFF), polygons (OBJ), partition (PLY), labels and report.
 "$cli" approximate "$data/elephant.off" -n 40 --device cpu -o "$tmp/out.off" --polygons "$tmp/poly.obj" \
-  --partition "$tmp/part.ply" --report "$tmp/r.json" -q
-for f in out.off poly.obj part.ply r.json; do [ -s "$tmp/$f" ] || fail "$f not written"; done
+  --partition "$tmp/part.ply" --labels "$tmp/labels.txt" --report "$tmp/r.json" -q
+for f in out.off poly.obj part.ply labels.txt r.json; do [ -s "$tmp/$f" ] || fail "$f not written"; done
+# The labels: one region id per input face (the OFF's face count), as in the partition's per-face
+# property, as many distinct ids as regions.
+ply_face_ids "$tmp/part.ply" >"$tmp/part-ids.txt" || fail "cannot read the partition's ids"
+cmp -s "$tmp/part-ids.txt" "$tmp/labels.txt" || fail "--labels does not match --partition"
+$py - "$tmp/labels.txt" "$tmp/r.json" "$data/elephant.off" <<'PY' || fail "--labels: count or regions"
+import json, sys
+labels = [int(x) for x in open(sys.argv[1]).read().split()]
+assert len(labels) == int(open(sys.argv[3]).read().split()[2]), len(labels)
+assert len(set(labels)) == json.load(open(sys.argv[2]))["regions"]
+PY
 $py - "$tmp/out.off" "$tmp/poly.obj" "$tmp/r.json" <<'PY' || fail "output check (elephant, -n 40)"
 import json, sys
 tok = []

@@ -25,3 +25,23 @@ with open(sys.argv[2], 'w') as out:
     out.writelines(f + '\n' for f in faces)
 PY
 }
+# ply_face_ids FILE.ply: prints the per-face `cluster` property of a binary PLY as meshcvt writes it
+# (vertex float x y z; face list uchar int vertex_indices, int cluster, uchar red green blue), one
+# per line, read independently of meshcvt's reader.
+ply_face_ids() {
+  python3 - "$1" <<'PY'
+import struct, sys
+data = open(sys.argv[1], 'rb').read()
+end = data.index(b"end_header\n") + len(b"end_header\n")
+header = data[:end].decode().split("\n")
+assert "format binary_little_endian 1.0" in header and "property int cluster" in header, header
+nv = int(next(l for l in header if l.startswith("element vertex")).split()[2])
+nf = int(next(l for l in header if l.startswith("element face")).split()[2])
+pos, out = end + 12 * nv, []
+for _ in range(nf):
+    k = data[pos]; pos += 1 + 4 * k
+    out.append(str(struct.unpack_from("<i", data, pos)[0])); pos += 4 + 3
+assert pos == len(data), "trailing bytes"
+print("\n".join(out))
+PY
+}
