@@ -24,7 +24,7 @@ struct RegisterCommand {
 /// True when stderr is a terminal (progress lines are shown only then).
 bool stderr_is_terminal();
 
-/// One id per line ("3\n"), the --labels file format of `cluster` and `coarsen`.
+/// One id per line ("3\n"), the --labels file format of `cluster`, `coarsen` and `approximate`.
 std::string labels_text(const std::vector<uint32_t>& labels);
 
 /// Progress line on stderr ("\rPHASE iteration N moves M"), for ClusterOptions::progress when
