@@ -121,13 +121,19 @@ constexpr unsigned kMaxComponentLevels = 6;
 // coarsen_mesh can give it its clusters instead of refusing the mesh (libcgal-demo's b9_mesh:
 // lone triangles). The rest of m is untouched. density (per face, may be empty) follows; parent: per face of the new m, its
 // face in the m given (left empty when nothing is refined). topology is rebuilt when m changes.
-// Returns the number of components that were too small (not counting those refined with them);
-// throws OptionError where subdividing does not give a component room (see the end).
-uint32_t refine_small_components(Mesh& m, Topology& topology, std::vector<float>& density,
-                                 std::vector<uint32_t>& parent) {
+// Returns the counts (RefinedComponents); throws OptionError where subdividing does not give a
+// component room (see the end).
+struct RefinedComponents {
+  uint32_t too_small = 0;  // components with fewer faces than they need clusters
+  uint32_t with_them = 0;  // components subdivided because they share an edge with one
+  uint64_t faces = 0;      // faces of m subdivided (before)
+};
+
+RefinedComponents refine_small_components(Mesh& m, Topology& topology, std::vector<float>& density,
+                                          std::vector<uint32_t>& parent) {
   const uint32_t nc = topology.component_count;
   // (One component with at least as many faces as the mesh has vertices: no pass over the faces.)
-  if (nc == 1 && m.face_count() >= std::max<size_t>(m.vertex_count(), kFewFaces)) return 0;
+  if (nc == 1 && m.face_count() >= std::max<size_t>(m.vertex_count(), kFewFaces)) return {};
   {
     std::vector<uint32_t> faces(nc, 0), vertices(nc, 0), last(m.vertex_count(), kNone);
     for (size_t f = 0; f < m.face_count(); ++f) {
@@ -140,7 +146,7 @@ uint32_t refine_small_components(Mesh& m, Topology& topology, std::vector<float>
     }
     bool suspect = false;
     for (uint32_t c = 0; c < nc && !suspect; ++c) suspect = faces[c] < vertices[c] || faces[c] < kFewFaces;
-    if (!suspect) return 0;
+    if (!suspect) return {};
   }
   const ComponentAllocation a = describe_components(m, topology);
   std::vector<unsigned> levels(nc, 0);
@@ -162,7 +168,7 @@ uint32_t refine_small_components(Mesh& m, Topology& topology, std::vector<float>
         if (v != w) edges.push_back({uint64_t(std::min(v, w)) << 32 | std::max(v, w), c});
       }
     }
-    if (edges.empty()) return 0;
+    if (edges.empty()) return {};
     std::sort(edges.begin(), edges.end());
     for (size_t f = 0; f < m.face_count(); ++f) {
       unsigned& own = levels[topology.face_component[f]];
@@ -176,10 +182,17 @@ uint32_t refine_small_components(Mesh& m, Topology& topology, std::vector<float>
       }
     }
   }
-  uint32_t refined = 0;  // the components too small (not those refined with them)
+  RefinedComponents refined;
   unsigned rounds = 0;
-  for (uint32_t c = 0; c < nc; ++c) refined += a.faces[c] < a.minimum[c], rounds = std::max(rounds, levels[c]);
-  if (rounds == 0) return 0;
+  for (uint32_t c = 0; c < nc; ++c) {
+    if (levels[c] == 0) continue;
+    const bool too_small = a.faces[c] < a.minimum[c];
+    refined.too_small += too_small;
+    refined.with_them += !too_small;
+    refined.faces += a.faces[c];
+    rounds = std::max(rounds, levels[c]);
+  }
+  if (rounds == 0) return {};
   // Level by level (components may need different counts); children keep their face's component.
   std::vector<uint32_t> component = topology.face_component;
   parent.resize(m.face_count());
@@ -227,7 +240,7 @@ struct JobRun {
   std::vector<uint32_t> origin;  // per surface face: the face of the mesh given to coarsen_surface
   LocalityOrder order;  // face i of the mesh given to run_job, reordered, is face order.face_of[i] of it
   std::vector<uint32_t> refine_parent;  // surface face -> reordered face (empty: none refined)
-  uint32_t refined_components = 0;
+  RefinedComponents refined;
   std::vector<float> density;  // per face of surface (empty: uniform)
   Topology topology;
   SurfacePreparation prepared;
@@ -252,7 +265,7 @@ JobRun run_job(Mesh m, const std::vector<float>& d, const std::vector<uint32_t>&
     run.prepared_faces = m.face_count();
   }
   if (options.refine_small_components)
-    run.refined_components = refine_small_components(m, run.topology, run.density, run.refine_parent);
+    run.refined = refine_small_components(m, run.topology, run.density, run.refine_parent);
   if (!run.refine_parent.empty()) run.origin = inherited(run.origin, run.refine_parent);
   job.cluster.density = run.density;  // coarsen_mesh weighs both the clusters and the dual with it
   run.job = coarsen_mesh(m, run.topology, job);
@@ -506,7 +519,9 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
     result.prepared = run.prepared;
     result.prepared_faces = run.prepared_faces;
   }
-  result.refined_components = run.refined_components;
+  result.refined_components = run.refined.too_small;
+  result.refined_with_them = run.refined.with_them;
+  result.refined_faces = run.refined.faces;
   result.surface_origin = std::move(run.origin);
   result.surface = std::move(run.surface);
   result.topology = std::move(run.topology);

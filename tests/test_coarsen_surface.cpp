@@ -515,6 +515,8 @@ TEST_CASE("coarsen_surface: a component with fewer faces than it needs clusters 
 
   const CoarsenSurfaceResult r = coarsen_surface(m, with_n(n));
   CHECK(r.refined_components == 1);
+  CHECK(r.refined_with_them == 0);
+  CHECK(r.refined_faces == 1);
   CHECK(r.surface.face_count() == sphere_faces + 4);  // one level: 4 faces for 3 clusters
   check_valid(r, n);
   const MeshInfo out = mesh_info(r.job.coarse.mesh, build_topology(r.job.coarse.mesh));
@@ -532,6 +534,8 @@ TEST_CASE("coarsen_surface: a component with fewer faces than it needs clusters 
   test::add_triangle(fin, u, v, w);
   const CoarsenSurfaceResult rf = coarsen_surface(fin, with_n(n));
   CHECK(rf.refined_components == 1);
+  CHECK(rf.refined_with_them == 1);  // the sphere, reported as such
+  CHECK(rf.refined_faces == fin.face_count());
   CHECK(rf.surface.face_count() == 4 * fin.face_count());
   CHECK(rf.job.coarse.mesh.vertex_count() == n);
   const Topology tf = build_topology(rf.surface);

@@ -183,12 +183,19 @@ void run_coarsen(const CoarsenArgs& a) {
                  "so (--subdivide 0 turns this off)\n",
                  a.input.c_str(), before, job.coarse.defects.size());
   }
-  if (result.refined_components > 0 && !a.quiet)
+  if (result.refined_components > 0 && !a.quiet) {
+    const std::string with_them =
+        result.refined_with_them == 0
+            ? std::string()
+            : ", and " + std::to_string(result.refined_with_them) + " sharing a non-manifold edge with " +
+                  (result.refined_components == 1 ? "it" : "them");
     std::fprintf(stderr,
                  "meshcvt: note: %s: subdivided %u component%s with fewer faces than the clusters %s to "
-                 "come out as a valid surface\n",
+                 "come out as a valid surface%s (%llu face%s in all)\n",
                  a.input.c_str(), result.refined_components, result.refined_components == 1 ? "" : "s",
-                 result.refined_components == 1 ? "it needs" : "they need");
+                 result.refined_components == 1 ? "it needs" : "they need", with_them.c_str(),
+                 (unsigned long long)result.refined_faces, result.refined_faces == 1 ? "" : "s");
+  }
   const SurfacePreparation& prepared = result.prepared;
   if (prepared.split_vertices > 0 && !a.quiet)
     std::fprintf(stderr, "meshcvt: note: %s: split %llu pinched vert%s (where parts of the surface touch at a point)\n",
@@ -249,6 +256,7 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("unsplit_components", result.unsplit_components)
         .value("retried_subdivided", result.retried_subdivided)
         .value("refined_components", result.refined_components)
+        .value("refined_with_them", result.refined_with_them).value("refined_faces", result.refined_faces)
         .value("gradation", a.gradation);
     j.begin_object("output").value("vertices", uint64_t(r.mesh.vertex_count())).value("faces", uint64_t(r.mesh.face_count()))
         .value("euler_characteristic", out_info.euler_characteristic).value("input_euler_characteristic", in_info.euler_characteristic)

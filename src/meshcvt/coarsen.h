@@ -552,8 +552,12 @@ struct CoarsenSurfaceResult {
   /// subdivided_faces still describe the subdivision asked for).
   bool retried_subdivided = false;
   /// Components of the kept job's surface subdivided because they had fewer faces than the
-  /// clusters they need (CoarsenSurfaceOptions::refine_small_components).
+  /// clusters they need (CoarsenSurfaceOptions::refine_small_components); components subdivided
+  /// with them because they share an edge with one (they may be large: a fin on a scan's edge
+  /// subdivides the scan); the faces subdivided, counted before.
   uint32_t refined_components = 0;
+  uint32_t refined_with_them = 0;
+  uint64_t refined_faces = 0;
   /// The job kept is the partly split one: components of the input left unsplit (split_edges
   /// counts the edges split in the others).
   uint32_t unsplit_components = 0;

@@ -229,6 +229,7 @@ python3 - "$tmp/lone.json" "$tmp/lone-out.off" <<'PY' || fail "lone triangle: re
 import json, sys
 r = json.load(open(sys.argv[1]))
 assert r['refined_components'] == 1, r['refined_components']
+assert r['refined_with_them'] == 0 and r['refined_faces'] == 1, (r['refined_with_them'], r['refined_faces'])
 tok = open(sys.argv[2]).read().split()
 assert int(tok[1]) == 100, tok[1]
 PY
