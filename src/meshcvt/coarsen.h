@@ -70,9 +70,11 @@ struct CoarsenOptions {
   double flip_max_dihedral_deg = 25;
   /// After the flips: passes of relax_coarse_vertices (0 = off), then the flips again. Moves
   /// vertices over their own cluster's faces where that improves their triangles. Default 3,
-  /// chosen from bench/RESULTS.md ("Relaxing the coarse vertices"): it lifts fandisk -> 1000 from
-  /// 26.9 to 33.4 degrees (Q avg 0.835 -> 0.887) and the elephant from 29.5 to 35.3 degrees with
-  /// Hausdorff and RMS distance unchanged, at about 15% of the clustering time on the bunnies.
+  /// chosen from bench/RESULTS.md ("Relaxing the coarse vertices", sixth session): it lifted
+  /// fandisk -> 1000 from 26.9 to 33.4 degrees (Q avg 0.835 -> 0.887) and the elephant from 29.5 to
+  /// 35.3 degrees with Hausdorff and RMS distance unchanged, at about 15% of the clustering time on
+  /// the bunnies. Measured again in the twenty-third session: fandisk 27.1 -> 33.8 degrees, Q avg
+  /// 0.839 -> 0.888 (the README's figures).
   /// Only when the dual has no defect.
   uint32_t relax_passes = 3;
   /// relax_coarse_vertices' limit (degrees) on how far a moved vertex may turn an incident
