@@ -117,16 +117,19 @@ constexpr unsigned kMaxComponentLevels = 6;
 
 // Each component of m with fewer faces than describe_components' minimum (a lone triangle needs
 // 3 clusters, a closed pair of faces 4) midpoint-subdivided until it has at least that many
-// faces, with every component that shares an edge with it (a non-manifold edge), so that
-// coarsen_mesh can give it its clusters instead of refusing the mesh (libcgal-demo's b9_mesh:
-// lone triangles). The rest of m is untouched. density (per face, may be empty) follows; parent: per face of the new m, its
-// face in the m given (left empty when nothing is refined). topology is rebuilt when m changes.
-// Returns the counts (RefinedComponents); throws OptionError where subdividing does not give a
-// component room (see the end).
+// faces, so that coarsen_mesh can give it its clusters instead of refusing the mesh
+// (libcgal-demo's b9_mesh: lone triangles). A face of another component on one of its edges (a
+// non-manifold edge: a fin on a scan's edge) is split at that edge's midpoint, so that no
+// T-junction is left; the rest of m is untouched. (Until the twenty-fourth session such a
+// component was subdivided whole with it: a fin on a scan's edge made four times the scan.)
+// density (per face, may be empty) follows; parent: per face of the new m, its face in the m given
+// (left empty when nothing is refined). topology is rebuilt when m changes. Returns the counts
+// (RefinedComponents); throws OptionError where subdividing does not give a component room (see
+// the end).
 struct RefinedComponents {
   uint32_t too_small = 0;  // components with fewer faces than they need clusters
-  uint32_t with_them = 0;  // components subdivided because they share an edge with one
-  uint64_t faces = 0;      // faces of m subdivided (before)
+  uint32_t with_them = 0;  // other components with faces split at an edge they share with one
+  uint64_t faces = 0;      // faces of m subdivided or split (before)
 };
 
 RefinedComponents refine_small_components(Mesh& m, Topology& topology, std::vector<float>& density,
@@ -150,67 +153,44 @@ RefinedComponents refine_small_components(Mesh& m, Topology& topology, std::vect
   }
   const ComponentAllocation a = describe_components(m, topology);
   std::vector<unsigned> levels(nc, 0);
-  for (uint32_t c = 0; c < nc; ++c)
-    for (uint64_t have = a.faces[c]; have < a.minimum[c] && levels[c] < kMaxComponentLevels; have *= 4) ++levels[c];
-  // A component sharing an edge (a non-manifold one) with a component to refine is refined with
-  // it, as many levels, else the split would leave a T-junction on that edge; and so on, until no
-  // component to refine shares an edge with one that is not.
-  for (bool grew = true; grew;) {
-    grew = false;
-    std::vector<std::pair<uint64_t, uint32_t>> edges;  // (lower << 32 | higher, component) of the faces to refine
-    std::vector<uint8_t> touched(m.vertex_count(), 0);
-    for (size_t f = 0; f < m.face_count(); ++f) {
-      const uint32_t c = topology.face_component[f];
-      if (levels[c] == 0) continue;
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t v = m.indices[3 * f + k], w = m.indices[3 * f + (k + 1) % 3];
-        touched[v] = 1;
-        if (v != w) edges.push_back({uint64_t(std::min(v, w)) << 32 | std::max(v, w), c});
-      }
-    }
-    if (edges.empty()) return {};
-    std::sort(edges.begin(), edges.end());
-    for (size_t f = 0; f < m.face_count(); ++f) {
-      unsigned& own = levels[topology.face_component[f]];
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t v = m.indices[3 * f + k], w = m.indices[3 * f + (k + 1) % 3];
-        if (v == w || !touched[v] || !touched[w]) continue;
-        const uint64_t key = uint64_t(std::min(v, w)) << 32 | std::max(v, w);
-        for (auto it = std::lower_bound(edges.begin(), edges.end(), std::pair<uint64_t, uint32_t>{key, 0});
-             it != edges.end() && it->first == key; ++it)
-          if (levels[it->second] > own) own = levels[it->second], grew = true;
-      }
-    }
-  }
-  RefinedComponents refined;
   unsigned rounds = 0;
+  RefinedComponents refined;
   for (uint32_t c = 0; c < nc; ++c) {
+    for (uint64_t have = a.faces[c]; have < a.minimum[c] && levels[c] < kMaxComponentLevels; have *= 4) ++levels[c];
     if (levels[c] == 0) continue;
-    const bool too_small = a.faces[c] < a.minimum[c];
-    refined.too_small += too_small;
-    refined.with_them += !too_small;
+    ++refined.too_small;
     refined.faces += a.faces[c];
     rounds = std::max(rounds, levels[c]);
   }
   if (rounds == 0) return {};
-  // Level by level (components may need different counts); children keep their face's component.
+  // Level by level (components may need different counts); children and pieces keep their face's
+  // component.
   std::vector<uint32_t> component = topology.face_component;
+  std::vector<uint8_t> split_in(nc, 0), split_face(m.face_count(), 0);  // components, faces of m split so far
   parent.resize(m.face_count());
   for (size_t f = 0; f < parent.size(); ++f) parent[f] = uint32_t(f);
   for (unsigned round = 0; round < rounds; ++round) {
     std::vector<uint8_t> selected(m.face_count());
     for (size_t f = 0; f < selected.size(); ++f) selected[f] = levels[component[f]] > round;
-    SubdividedFaces fine = subdivide_faces(m, selected, 1);
+    SubdividedFaces fine = subdivide_faces(m, selected, 1, /*split_neighbours=*/true);
     std::vector<uint32_t> next_parent(fine.parent.size()), next_component(fine.parent.size());
     for (size_t f = 0; f < fine.parent.size(); ++f) {
-      next_parent[f] = parent[fine.parent[f]];
-      next_component[f] = component[fine.parent[f]];
+      const uint32_t from = fine.parent[f];
+      next_parent[f] = parent[from];
+      next_component[f] = component[from];
+      // A face not selected that came out in pieces: a neighbour split at a shared edge.
+      if (!selected[from] && levels[component[from]] == 0 && ((f > 0 && fine.parent[f - 1] == from) ||
+                              (f + 1 < fine.parent.size() && fine.parent[f + 1] == from))) {
+        split_in[component[from]] = 1;
+        if (!split_face[parent[from]]) split_face[parent[from]] = 1, ++refined.faces;
+      }
     }
     density = inherited(density, fine.parent);
     parent = std::move(next_parent);
     component = std::move(next_component);
     m = std::move(fine.mesh);
   }
+  for (uint32_t c = 0; c < nc; ++c) refined.with_them += split_in[c];
   // Where the refined surface still has a component too small, subdividing did not help: two
   // faces on the same three corners (a pillow of no volume) come apart at their non-manifold
   // edges into pieces as small (assimp-testmodels' concave_polygon.obj). That mesh cannot be

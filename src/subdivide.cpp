@@ -183,7 +183,8 @@ Mesh subdivide_midpoint(const Mesh& mesh, unsigned levels) {
   return current;
 }
 
-SubdividedFaces subdivide_faces(const Mesh& mesh, const std::vector<uint8_t>& selected, unsigned levels) {
+SubdividedFaces subdivide_faces(const Mesh& mesh, const std::vector<uint8_t>& selected, unsigned levels,
+                                bool split_neighbours) {
   const size_t nv = mesh.vertex_count(), nf = mesh.face_count();
   if (selected.size() != nf)
     throw OptionError("subdivide_faces: " + std::to_string(selected.size()) + " selection entries for " +
@@ -194,6 +195,8 @@ SubdividedFaces subdivide_faces(const Mesh& mesh, const std::vector<uint8_t>& se
   for (uint32_t i : mesh.indices)
     if (i >= nv)
       throw OptionError("mesh uses vertex " + std::to_string(i) + " but has " + std::to_string(nv) + " vertices");
+  if (split_neighbours && levels > 1)
+    throw OptionError("subdivide_faces: split_neighbours takes one level at a time, not " + std::to_string(levels));
   // The selected faces alone, their vertices renumbered in order of first use.
   Mesh part;
   std::vector<uint32_t> local(nv, kNone), global;
@@ -212,34 +215,101 @@ SubdividedFaces subdivide_faces(const Mesh& mesh, const std::vector<uint8_t>& se
     }
   }
   std::sort(edges.begin(), edges.end());
-  // A face left as it is must not have an edge that gets a midpoint.
-  for (size_t f = 0; f < nf; ++f) {
+  // A face left as it is must not have an edge that gets a midpoint; with split_neighbours such a
+  // face is split there instead (split_edges: a bit per edge, k for the edge from corner k).
+  std::vector<uint8_t> split_edges(split_neighbours ? nf : 0, 0);
+  uint64_t extra_faces = 0;  // what the split neighbours add
+  for (size_t f = 0; f < nf && levels > 0; ++f) {
     if (selected[f]) continue;
     for (int k = 0; k < 3; ++k) {
       const uint32_t v = mesh.indices[3 * f + k], w = mesh.indices[3 * f + (k + 1) % 3];
       if (v == w || local[v] == kNone || local[w] == kNone) continue;
-      if (std::binary_search(edges.begin(), edges.end(), uint64_t(std::min(v, w)) << 32 | std::max(v, w)))
+      if (!std::binary_search(edges.begin(), edges.end(), uint64_t(std::min(v, w)) << 32 | std::max(v, w))) continue;
+      if (!split_neighbours)
         throw OptionError("subdivide_faces: face " + std::to_string(f) +
                           " is not selected but shares an edge with a selected face (the split would leave a T-junction)");
+      split_edges[f] |= uint8_t(1u << k);
+      ++extra_faces;  // one more face per split edge: 2, 3 or 4 in all
     }
   }
   const Mesh fine = subdivide_midpoint(part, levels);
   const size_t part_nv = global.size(), children = size_t(1) << (2 * levels);
   if (nv + (fine.vertex_count() - part_nv) > kMaxVertices ||
-      nf + (children - 1) * part.face_count() > kMaxFaces)
+      nf + (children - 1) * part.face_count() + extra_faces > kMaxFaces)
     throw OptionError("subdivide_faces: the result would be beyond 32-bit indices");
   SubdividedFaces out;
   out.mesh.positions = mesh.positions;
   out.mesh.positions.insert(out.mesh.positions.end(), fine.positions.begin() + 3 * part_nv, fine.positions.end());
   auto vertex_of = [&](uint32_t i) { return i < part_nv ? global[i] : uint32_t(nv + (i - part_nv)); };
-  const size_t faces_out = nf + (children - 1) * part.face_count();
+  // With split neighbours (one level): each selected edge's midpoint, read off the children of a
+  // selected face on it, (a, ab, ca) and (ab, b, bc) (subdivide_midpoint's order).
+  std::vector<std::pair<uint64_t, uint32_t>> midpoints;  // (lower << 32 | higher, output vertex)
+  if (extra_faces > 0) {
+    size_t i = 0;
+    for (size_t f = 0; f < nf; ++f) {
+      if (!selected[f]) continue;
+      const uint32_t* t = &mesh.indices[3 * f];
+      const uint32_t* first = &fine.indices[3 * (4 * i)];
+      const uint32_t mid[3] = {vertex_of(first[1]), vertex_of(fine.indices[3 * (4 * i + 1) + 2]), vertex_of(first[2])};
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = t[k], w = t[(k + 1) % 3];
+        if (v != w) midpoints.push_back({uint64_t(std::min(v, w)) << 32 | std::max(v, w), mid[k]});
+      }
+      ++i;
+    }
+    std::sort(midpoints.begin(), midpoints.end());
+  }
+  auto midpoint_of = [&](uint32_t v, uint32_t w) {
+    const uint64_t key = uint64_t(std::min(v, w)) << 32 | std::max(v, w);
+    const auto it = std::lower_bound(midpoints.begin(), midpoints.end(), std::pair<uint64_t, uint32_t>{key, 0});
+    assert(it != midpoints.end() && it->first == key);
+    return it->second;
+  };
+  auto squared_distance = [&](uint32_t v, uint32_t w) {
+    double d2 = 0;
+    for (int c = 0; c < 3; ++c) {
+      const double d = double(out.mesh.positions[3 * size_t(v) + c]) - out.mesh.positions[3 * size_t(w) + c];
+      d2 += d * d;
+    }
+    return d2;
+  };
+  const size_t faces_out = nf + (children - 1) * part.face_count() + extra_faces;
   out.mesh.indices.reserve(3 * faces_out);
   out.parent.reserve(faces_out);
   size_t next_part_face = 0;
   for (size_t f = 0; f < nf; ++f) {
-    if (!selected[f]) {
+    if (!selected[f] && (split_edges.empty() || split_edges[f] == 0)) {
       out.mesh.indices.insert(out.mesh.indices.end(), &mesh.indices[3 * f], &mesh.indices[3 * f] + 3);
       out.parent.push_back(uint32_t(f));
+      continue;
+    }
+    if (!selected[f]) {
+      // A neighbour split at its split edges' midpoints, oriented as it: across the one split edge
+      // (two faces), at the corner between two (that corner's triangle and the rest cut along its
+      // shorter diagonal: three), or as a selected face (four).
+      const uint32_t* t = &mesh.indices[3 * f];
+      const unsigned bits = split_edges[f];
+      auto emit = [&](uint32_t a, uint32_t b, uint32_t c) {
+        out.mesh.indices.insert(out.mesh.indices.end(), {a, b, c});
+        out.parent.push_back(uint32_t(f));
+      };
+      if (bits == 7) {
+        const uint32_t ab = midpoint_of(t[0], t[1]), bc = midpoint_of(t[1], t[2]), ca = midpoint_of(t[2], t[0]);
+        emit(t[0], ab, ca), emit(ab, t[1], bc), emit(ca, bc, t[2]), emit(ab, bc, ca);
+      } else if (bits == 1 || bits == 2 || bits == 4) {
+        const int k = bits == 1 ? 0 : bits == 2 ? 1 : 2;  // the split edge runs from corner k
+        const uint32_t a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3], m = midpoint_of(a, b);
+        emit(a, m, c), emit(m, b, c);
+      } else {
+        const int u = (~bits & 7) == 1 ? 0 : (~bits & 7) == 2 ? 1 : 2;  // the edge left whole runs from corner u
+        const uint32_t c = t[u], a = t[(u + 1) % 3], b = t[(u + 2) % 3];
+        const uint32_t ab = midpoint_of(a, b), bc = midpoint_of(b, c);
+        emit(ab, b, bc);
+        if (squared_distance(a, bc) <= squared_distance(ab, c))
+          emit(a, ab, bc), emit(a, bc, c);
+        else
+          emit(a, ab, c), emit(ab, bc, c);
+      }
       continue;
     }
     for (size_t c = next_part_face * children; c < (next_part_face + 1) * children; ++c) {

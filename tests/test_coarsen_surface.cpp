@@ -525,21 +525,39 @@ TEST_CASE("coarsen_surface: a component with fewer faces than it needs clusters 
   // The lone triangle's part holds 3 of the clusters.
   CHECK(std::count(r.job.allocation.clusters.begin(), r.job.allocation.clusters.end(), 3u) == 1);
 
-  // A fin on one of the sphere's edges (a non-manifold edge): the sphere is subdivided with it,
-  // else the fin's midpoint on that edge would be a T-junction in the sphere.
+  // A fin on one of the sphere's edges (a non-manifold edge): the sphere's two faces on that edge
+  // are split at its midpoint with the fin, else it would be a T-junction in the sphere; the rest
+  // of the sphere is left as it is.
   Mesh fin = test::icosphere(2);
   const uint32_t u = fin.indices[0], v = fin.indices[1];
   const uint32_t w = test::add_vertex(fin, 2 * fin.positions[3 * u], 2 * fin.positions[3 * u + 1],
                                       2 * fin.positions[3 * u + 2]);
   test::add_triangle(fin, u, v, w);
-  const CoarsenSurfaceResult rf = coarsen_surface(fin, with_n(n));
+  CoarsenSurfaceOptions keep = with_n(n);
+  keep.keep_surface_origin = true;
+  const CoarsenSurfaceResult rf = coarsen_surface(fin, keep);
   CHECK(rf.refined_components == 1);
   CHECK(rf.refined_with_them == 1);  // the sphere, reported as such
-  CHECK(rf.refined_faces == fin.face_count());
-  CHECK(rf.surface.face_count() == 4 * fin.face_count());
+  CHECK(rf.refined_faces == 3);      // the fin, and the sphere's two faces on its edge
+  CHECK(rf.surface.face_count() == sphere_faces + 4 + 2);
+  std::vector<uint32_t> pieces(fin.face_count(), 0);
+  for (uint32_t g : rf.surface_origin) ++pieces[g];
+  CHECK(pieces.back() == 4);
+  CHECK(std::count(pieces.begin(), pieces.end(), 2u) == 2);
+  CHECK(std::count(pieces.begin(), pieces.end(), 1u) == int(sphere_faces) - 2);
+  // (Not check_valid: the dual cannot keep a non-manifold edge, so the loops may differ, as the
+  // CLI's note says.)
+  CHECK(rf.job.coarse.defects.empty());
   CHECK(rf.job.coarse.mesh.vertex_count() == n);
+  const MeshInfo coarse = mesh_info(rf.job.coarse.mesh, build_topology(rf.job.coarse.mesh));
+  CHECK(coarse.components == 2);
+  CHECK(coarse.nonmanifold_edges == 0);
+  CHECK(coarse.nonmanifold_vertices == 0);
   const Topology tf = build_topology(rf.surface);
-  CHECK(mesh_info(rf.surface, tf).nonmanifold_edges == 2);  // the fin's edge, in two halves: no T-junction
+  const MeshInfo fine = mesh_info(rf.surface, tf);
+  CHECK(fine.nonmanifold_edges == 2);  // the fin's edge, in two halves
+  CHECK(fine.boundary_edges == 4);     // the fin's other two edges, in halves: no T-junction
+  CHECK(fine.euler_characteristic == mesh_info(fin, build_topology(fin)).euler_characteristic);
 
   // Two faces on the same three corners (a closed pillow of no volume, which needs 4 clusters)
   // come apart at their non-manifold edges when subdivided: no number of levels helps, and the

@@ -220,3 +220,122 @@ TEST_CASE("subdivide_faces: only the selected faces, children in their place, pa
   bad.indices[0] = 99;
   CHECK_THROWS_AS(meshcvt::subdivide_faces(bad, selected, 1), meshcvt::OptionError);
 }
+
+TEST_CASE("subdivide_faces: split_neighbours splits the faces at the selection's edges, no T-junction") {
+  // The octahedron (convex, around the origin: every face faces away from it), and stretched (so
+  // that a face between two split edges is cut along either diagonal: the regular one ties). Its
+  // face 0 is (0, 2, 4), with neighbours 4 across (0, 2), 1 across (2, 4), 3 across (4, 0).
+  for (const float stretch : {1.0f, 3.0f}) {
+  Mesh m = octahedron();
+  m.positions[0] *= stretch, m.positions[3] *= stretch, m.positions[7] /= stretch, m.positions[10] /= stretch;
+  struct Case {
+    std::vector<uint8_t> selected;
+    size_t faces;                 // faces out
+    std::vector<size_t> pieces;   // per input face: its faces out
+  };
+  const Case cases[] = {
+      // face 0 alone: its three neighbours each get one split edge (two pieces each).
+      {{1, 0, 0, 0, 0, 0, 0, 0}, 14, {4, 2, 1, 2, 2, 1, 1, 1}},
+      // faces 0 and 2: faces 1 and 3 lie between them (two split edges: three pieces), 4 and 6
+      // get one split edge, 5 and 7 none.
+      {{1, 0, 1, 0, 0, 0, 0, 0}, 20, {4, 3, 4, 3, 2, 1, 2, 1}},
+      // face 0's three neighbours: face 0 has three split edges (four pieces, as if selected);
+      // 2, 5 and 7 lie between two of them, 6 touches none.
+      {{0, 1, 0, 1, 1, 0, 0, 0}, 26, {4, 4, 3, 4, 4, 3, 1, 3}},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(stretch);
+    CAPTURE(c.faces);
+    const meshcvt::SubdividedFaces s = meshcvt::subdivide_faces(m, c.selected, 1, /*split_neighbours=*/true);
+    REQUIRE(s.mesh.face_count() == c.faces);
+    REQUIRE(s.parent.size() == c.faces);
+    std::vector<size_t> pieces(m.face_count(), 0);
+    for (size_t f = 0; f < s.parent.size(); ++f) {
+      ++pieces[s.parent[f]];
+      if (f > 0) CHECK(s.parent[f] >= s.parent[f - 1]);  // in input order
+    }
+    CHECK(pieces == c.pieces);
+    // A face between two split edges is cut along the shorter diagonal of what is left when the
+    // corner between them is cut off: the edge its pieces share from an input vertex to a
+    // midpoint, against the one from the other input vertex to the other midpoint.
+    const uint32_t nv = uint32_t(m.vertex_count());
+    auto d2 = [&](uint32_t p, uint32_t q) {
+      double sum = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double d = double(s.mesh.positions[3 * p + k]) - s.mesh.positions[3 * q + k];
+        sum += d * d;
+      }
+      return sum;
+    };
+    for (uint32_t g = 0; g < m.face_count(); ++g) {
+      if (pieces[g] != 3) continue;
+      std::vector<uint32_t> corners, mids;
+      std::vector<std::pair<uint32_t, uint32_t>> edges;
+      for (size_t f = 0; f < s.mesh.face_count(); ++f) {
+        if (s.parent[f] != g) continue;
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t v = s.mesh.indices[3 * f + k], w = s.mesh.indices[3 * f + (k + 1) % 3];
+          edges.push_back({std::min(v, w), std::max(v, w)});
+          (v < nv ? corners : mids).push_back(v);
+        }
+      }
+      std::sort(edges.begin(), edges.end());
+      std::sort(mids.begin(), mids.end());
+      mids.erase(std::unique(mids.begin(), mids.end()), mids.end());
+      REQUIRE(mids.size() == 2);
+      // The shared edges: the two midpoints' and the diagonal (an input vertex and a midpoint).
+      std::pair<uint32_t, uint32_t> diagonal{meshcvt::kNone, meshcvt::kNone};
+      for (size_t i = 0; i + 1 < edges.size(); ++i)
+        if (edges[i] == edges[i + 1] && edges[i].first < nv) diagonal = edges[i];
+      REQUIRE(diagonal.first != meshcvt::kNone);
+      // The corner cut off: the input vertex of a piece with both midpoints that is not on the
+      // diagonal (the piece of the diagonal's input vertex may have both midpoints too).
+      uint32_t cut = meshcvt::kNone;
+      for (size_t f = 0; f < s.mesh.face_count(); ++f) {
+        if (s.parent[f] != g) continue;
+        const uint32_t* t = &s.mesh.indices[3 * f];
+        const uint32_t input_vertex = *std::find_if(t, t + 3, [&](uint32_t v) { return v < nv; });
+        if (std::count_if(t, t + 3, [&](uint32_t v) { return v >= nv; }) == 2 && input_vertex != diagonal.first)
+          cut = input_vertex;
+      }
+      REQUIRE(cut != meshcvt::kNone);
+      const uint32_t* t = &m.indices[3 * g];
+      const uint32_t other_corner = t[0] != cut && t[0] != diagonal.first ? t[0] : t[1] != cut && t[1] != diagonal.first ? t[1] : t[2];
+      const uint32_t other_mid = mids[0] == diagonal.second ? mids[1] : mids[0];
+      CHECK(d2(diagonal.first, diagonal.second) <= d2(other_corner, other_mid));
+    }
+    CHECK(s.mesh.source_polygon == s.parent);
+    CHECK(std::equal(m.positions.begin(), m.positions.end(), s.mesh.positions.begin()));
+    // Still a closed, consistently oriented sphere of the same area: a T-junction would leave
+    // boundary edges.
+    const meshcvt::Topology t = meshcvt::build_topology(s.mesh);
+    const meshcvt::MeshInfo info = meshcvt::mesh_info(s.mesh, t);
+    CHECK(info.boundary_edges == 0);
+    CHECK(info.nonmanifold_edges == 0);
+    CHECK(info.euler_characteristic == 2);
+    CHECK(info.components == 1);
+    CHECK(t.orientation_flips == 0);
+    CHECK(info.total_area == doctest::Approx(area(m)));
+    for (size_t f = 0; f < s.mesh.face_count(); ++f) {
+      double n[3], centroid[3] = {0, 0, 0};
+      normal(s.mesh, f, n);
+      for (int k = 0; k < 3; ++k)
+        for (int d = 0; d < 3; ++d) centroid[d] += s.mesh.positions[3 * s.mesh.indices[3 * f + k] + d] / 3.0;
+      CHECK(n[0] * centroid[0] + n[1] * centroid[1] + n[2] * centroid[2] > 0);  // outward, not flat
+      // Each piece lies in its input face: its corners are on that face's plane.
+      double pn[3];
+      normal(m, s.parent[f], pn);
+      const float* a = &m.positions[3 * m.indices[3 * s.parent[f]]];
+      for (int k = 0; k < 3; ++k) {
+        const float* p = &s.mesh.positions[3 * s.mesh.indices[3 * f + k]];
+        CHECK(pn[0] * (p[0] - a[0]) + pn[1] * (p[1] - a[1]) + pn[2] * (p[2] - a[2]) == doctest::Approx(0));
+      }
+    }
+  }
+  }
+  // Nothing to split at level 0; one level at a time.
+  const Mesh m = octahedron();
+  const std::vector<uint8_t> first{1, 0, 0, 0, 0, 0, 0, 0};
+  CHECK(meshcvt::subdivide_faces(m, first, 0, true).mesh.indices == m.indices);
+  CHECK_THROWS_AS(meshcvt::subdivide_faces(m, first, 2, true), meshcvt::OptionError);
+}

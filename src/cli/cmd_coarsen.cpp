@@ -187,7 +187,8 @@ void run_coarsen(const CoarsenArgs& a) {
     const std::string with_them =
         result.refined_with_them == 0
             ? std::string()
-            : ", and " + std::to_string(result.refined_with_them) + " sharing a non-manifold edge with " +
+            : ", and split the faces of " + std::to_string(result.refined_with_them) + " other component" +
+                  (result.refined_with_them == 1 ? "" : "s") + " at the non-manifold edges shared with " +
                   (result.refined_components == 1 ? "it" : "them");
     std::fprintf(stderr,
                  "meshcvt: note: %s: subdivided %u component%s with fewer faces than the clusters %s to "

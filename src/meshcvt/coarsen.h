@@ -494,9 +494,10 @@ struct CoarsenSurfaceOptions {
   bool retry_subdivided = true;
   /// Subdivide (subdivide_faces) each component with fewer faces than the clusters it needs to
   /// come out as a valid surface (describe_components' minimum: 3 for a lone triangle), until it
-  /// has enough, instead of refusing the mesh (as coarsen_mesh does when this is false). The
-  /// components that share an edge with it (a non-manifold edge) are subdivided with it, so the
-  /// surface gets no T-junction.
+  /// has enough, instead of refusing the mesh (as coarsen_mesh does when this is false). A face
+  /// of another component on one of its edges (a non-manifold edge) is split at that edge's
+  /// midpoint with it (subdivide_faces' split_neighbours), so the surface gets no T-junction and
+  /// the rest of that component is left as it is.
   bool refine_small_components = true;
   /// Fill CoarsenSurfaceResult::surface_origin (what input_face_clusters needs): a face index per
   /// surface face, carried through every step (4.8M faces: about 40 MB more at the peak and 0.04 s).
@@ -554,9 +555,9 @@ struct CoarsenSurfaceResult {
   /// subdivided_faces still describe the subdivision asked for).
   bool retried_subdivided = false;
   /// Components of the kept job's surface subdivided because they had fewer faces than the
-  /// clusters they need (CoarsenSurfaceOptions::refine_small_components); components subdivided
-  /// with them because they share an edge with one (they may be large: a fin on a scan's edge
-  /// subdivides the scan); the faces subdivided, counted before.
+  /// clusters they need (CoarsenSurfaceOptions::refine_small_components); other components with
+  /// faces split at an edge they share with one (a fin on a scan's edge: the scan's two faces on
+  /// that edge); the faces subdivided or split, counted before.
   uint32_t refined_components = 0;
   uint32_t refined_with_them = 0;
   uint64_t refined_faces = 0;

@@ -35,19 +35,26 @@ struct SubdividedFaces {
 };
 
 /// Midpoint subdivision (as subdivide_midpoint, `levels` times) of the selected faces only: the
-/// others are copied as they are. Meant for whole parts of a mesh that share no edge with the rest
-/// (a component too small for its clusters), so the result has no T-junction.
+/// others are copied as they are. Meant for parts of a mesh too coarse for their clusters (a
+/// component with fewer faces than it needs clusters).
 ///
-/// Input : mesh; selected: one entry per face (non-zero: subdivide it); levels >= 0.
+/// Input : mesh; selected: one entry per face (non-zero: subdivide it); levels >= 0;
+///         split_neighbours: what to do with a face that is not selected but has an edge of a
+///         selected one (across a non-manifold edge, or at the selection's rim): false refuses it
+///         (select whole parts that share no edge with the rest), true splits it at those edges'
+///         midpoints so that no T-junction is left (one level at a time): into 2 faces across one
+///         split edge, 3 at the corner between two (that corner's triangle, the rest cut along its
+///         shorter diagonal), 4 as a selected face for three.
 /// Output: faces in input order, each selected face replaced by its 4^levels children (in
-///         subdivide_midpoint's order, oriented as it), parent naming the input face of each;
-///         every input vertex kept with its id, the new midpoints after them. source_polygon
-///         follows the faces (the input face id where the input has none). The area, orientation
-///         and Euler characteristic are kept.
+///         subdivide_midpoint's order, oriented as it), each split neighbour by its 2 to 4 pieces,
+///         parent naming the input face of each; every input vertex kept with its id, the new
+///         midpoints after them. source_polygon follows the faces (the input face id where the
+///         input has none). The area, orientation and Euler characteristic are kept.
 /// Throws OptionError when the sizes disagree, an index is out of range, a selected face shares
-/// an edge with a face that is not selected (the split would leave a T-junction), or the result
-/// is beyond 32-bit indices.
-SubdividedFaces subdivide_faces(const Mesh& mesh, const std::vector<uint8_t>& selected, unsigned levels);
+/// an edge with a face that is not selected and split_neighbours is false (the split would leave
+/// a T-junction), split_neighbours is true with levels > 1, or the result is beyond 32-bit indices.
+SubdividedFaces subdivide_faces(const Mesh& mesh, const std::vector<uint8_t>& selected, unsigned levels,
+                                bool split_neighbours = false);
 
 /// The smallest k >= 0 such that faces * 4^k >= clusters * min_faces_per_cluster, i.e. how many
 /// subdivision levels give every cluster at least `min_faces_per_cluster` faces on average.

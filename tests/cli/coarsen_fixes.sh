@@ -233,6 +233,32 @@ assert r['refined_with_them'] == 0 and r['refined_faces'] == 1, (r['refined_with
 tok = open(sys.argv[2]).read().split()
 assert int(tok[1]) == 100, tok[1]
 PY
+# A lone triangle on one of the elephant's edges (a fin: the edge is non-manifold): the fin is
+# subdivided and the elephant's two faces on that edge are split at its midpoint; the rest of the
+# elephant is clustered as it is (5558 faces, not four times as many).
+fin_corner=$(python3 - "$data/elephant.off" <<'PY'
+import sys
+tok = open(sys.argv[1]).read().split()
+nv = int(tok[1])
+u, v = int(tok[4 + 3 * nv + 1]), int(tok[4 + 3 * nv + 2])
+pu, pv = [float(x) for x in tok[4 + 3 * u:7 + 3 * u]], [float(x) for x in tok[4 + 3 * v:7 + 3 * v]]
+print(" ".join(repr(1.5 * a - 0.25 * b) for a, b in zip(pu, pv)), u, v)
+PY
+)
+read -r fx fy fz fu fv <<<"$fin_corner"
+off_with_extra "$data/elephant.off" "$tmp/edge_fin.off" "$fx $fy $fz" "3 $fu $fv +0"
+"$cli" coarsen "$tmp/edge_fin.off" -n 100 -o "$tmp/edge_fin-out.off" --device cpu --no-error \
+  --report "$tmp/edge_fin.json" >"$tmp/out" 2>"$tmp/err" || fail "fin on an edge: $(cat "$tmp/err")"
+grep -q "note: .*edge_fin.off: subdivided 1 component .*, and split the faces of 1 other component at the non-manifold edges shared with it (3 faces in all)" "$tmp/err" ||
+  fail "fin on an edge: note: $(cat "$tmp/err")"
+python3 - "$tmp/edge_fin.json" "$tmp/edge_fin-out.off" <<'PY' || fail "fin on an edge: report or output"
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert (r['refined_components'], r['refined_with_them'], r['refined_faces']) == (1, 1, 3), r
+assert r['faces'] == 5558 + 1 + 3 + 2, r['faces']  # the fin in 4, two faces in 2
+tok = open(sys.argv[2]).read().split()
+assert int(tok[1]) == 100, tok[1]
+PY
 python3 - "$tmp/e50.json" <<'PY' || fail "refined_components in the plain elephant's report"
 import json, sys
 assert json.load(open(sys.argv[1]))['refined_components'] == 0
