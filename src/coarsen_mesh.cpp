@@ -1786,7 +1786,8 @@ ComponentAllocation allocate_component_clusters(const Mesh& mesh, const Topology
     if (a.faces[c] < a.minimum[c])
       throw OptionError("coarsen: " + describe_component(a, c) + " has " + std::to_string(a.faces[c]) +
                         " faces, fewer than the " + std::to_string(a.minimum[c]) +
-                        " clusters it needs to come out as a valid surface: subdivide the mesh first");
+                        " clusters it needs to come out as a valid surface: subdivide it first (coarsen_surface "
+                        "does, with refine_small_components)");
     needed += a.minimum[c];
   }
   if (n < needed) {
