@@ -75,18 +75,7 @@ assert all(c == 1 and (b, a) in directed for (a, b), c in directed.items()), "no
 PY
 
 # The fallback.
-python3 - "$data/elephant.off" "$tmp/long.off" <<'PY'
-import sys
-tok = open(sys.argv[1]).read().split()
-nv, nf = int(tok[1]), int(tok[2])
-with open(sys.argv[2], 'w') as out:
-    out.write(f"OFF\n{nv} {nf} 0\n")
-    for i in range(nv):
-        x, y, z = (float(t) for t in tok[4 + 3 * i:7 + 3 * i])
-        out.write(f"{4 * x:.6f} {y:.6f} {z:.6f}\n")
-    for i in range(nf):
-        out.write(" ".join(tok[4 + 3 * nv + 4 * i:8 + 3 * nv + 4 * i]) + "\n")
-PY
+off_mapped "$data/elephant.off" "$tmp/long.off" "4 * x" y z
 n=400
 for mode in auto off 1.5; do
   "$cli" coarsen "$tmp/long.off" -n $n -o "$tmp/long-$mode.off" --device cpu --no-error --fix-rounds 0 \

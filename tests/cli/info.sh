@@ -169,21 +169,12 @@ set -e
 [ $rc -eq 1 ] || fail "missing file: expected exit 1, got $rc"
 grep -q "^meshcvt: error: .*no-such-mesh.off" "$tmp/err" || fail "missing file: message: $(cat "$tmp/err")"
 [ ! -s "$tmp/out" ] || fail "missing file: something on stdout"
+
 # ---- coordinates far from the origin for the mesh's size: a note says how coarsely 32-bit floats
 # keep them (the elephant, about 1 across, moved to x = 4e3: spacing 2.4e-4 > 1e-5 of its size;
 # at x = 40 the spacing is 3.8e-6, well within, and nothing is said)
 for shift in 4000 40; do
-  python3 - "$data/elephant.off" "$tmp/far.off" "$shift" <<'PY'
-import sys
-tok = open(sys.argv[1]).read().split()
-nv, nf = int(tok[1]), int(tok[2])
-with open(sys.argv[2], "w") as out:
-    out.write(f"OFF\n{nv} {nf} 0\n")
-    for i in range(nv):
-        x, y, z = (float(t) for t in tok[4 + 3 * i:7 + 3 * i])
-        out.write(f"{x + float(sys.argv[3])!r} {y!r} {z!r}\n")
-    out.write("\n".join(" ".join(tok[4 + 3 * nv + 4 * k:8 + 3 * nv + 4 * k]) for k in range(nf)) + "\n")
-PY
+  off_mapped "$data/elephant.off" "$tmp/far.off" "x + $shift" y z
   "$cli" info "$tmp/far.off" >"$tmp/out" 2>"$tmp/err"
   if [ "$shift" = 4000 ]; then
     grep -q "^meshcvt: note: .*far.off: coordinates reach 4e+03 while the mesh spans 1: as 32-bit floats they are kept to 0.000244 (0.024% of the span)" "$tmp/err" ||

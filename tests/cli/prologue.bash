@@ -25,6 +25,23 @@ with open(sys.argv[2], 'w') as out:
     out.writelines(f + '\n' for f in faces)
 PY
 }
+# off_mapped IN OUT X Y Z: writes OUT, the OFF file IN (triangles only, no comments) with each
+# vertex moved to the Python expressions X, Y, Z of its coordinates x, y, z (as "%.9g").
+off_mapped() {
+  python3 - "$@" <<'PY'
+import sys
+tok = open(sys.argv[1]).read().split()
+nv, nf = int(tok[1]), int(tok[2])
+fx, fy, fz = (compile(e, "expr", "eval") for e in sys.argv[3:6])
+with open(sys.argv[2], "w") as out:
+    out.write(f"OFF\n{nv} {nf} 0\n")
+    for i in range(nv):
+        x, y, z = (float(t) for t in tok[4 + 3 * i:7 + 3 * i])
+        out.write("%.9g %.9g %.9g\n" % tuple(eval(f, {"x": x, "y": y, "z": z}) for f in (fx, fy, fz)))
+    for k in range(nf):
+        out.write(" ".join(tok[4 + 3 * nv + 4 * k:8 + 3 * nv + 4 * k]) + "\n")
+PY
+}
 # ply_face_ids FILE.ply: prints the per-face `cluster` property of a binary PLY as meshcvt writes it
 # (vertex float x y z; face list uchar int vertex_indices, int cluster, uchar red green blue), one
 # per line, read independently of meshcvt's reader.
