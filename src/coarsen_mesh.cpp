@@ -178,11 +178,14 @@ std::string describe_component(const ComponentAllocation& a, uint32_t c) {
 
 // ---- the fix loop
 
-// Components up to this many faces may be rebuilt from one cluster per face when nothing else
-// makes them valid (a priority queue over their faces and a fitness check per merge): about 1.5 s
-// for polygon_mesh's 32k faces. At 20000 (until the twenty-second session) polygon_mesh kept 16-26
-// defects at every count and the split cheese (40k faces) 442; this makes both valid.
-constexpr uint32_t kMaxFacesPerFaceStart = 65536;
+// Components up to this many faces, in all, may be rebuilt from one cluster per face when nothing
+// else makes them valid (a priority queue over their faces and a fitness check per merge): about
+// 1.5 s for polygon_mesh's 32k faces. At 20000 (until the twenty-second session) polygon_mesh kept
+// 16-26 defects at every count and the split cheese (40k faces) 442; this makes both valid. The
+// limit is on the sum, smallest components first (until the twenty-fourth session it was per
+// component): the merge's cost grows faster than its faces, and forty broken tetrahedra
+// subdivided six times (16k faces each) ran for minutes.
+constexpr uint64_t kMaxFacesPerFaceStart = 65536;
 
 // Per-face data of the fixes, computed once: weight w = rho * area and centroid, input units.
 struct FaceData {
@@ -1187,6 +1190,19 @@ void replace_component(const Topology& topology, std::vector<uint32_t>& base, co
 }
 
 
+// The work merge_down may do: faces scored (a candidate's two clusters, checked by RegionCheck and
+// the corner polygons), shared by the calls of one merge_down_with_flips. A pair that does not fit
+// is scored again whenever a cluster next to it merges, which is cheap while clusters are small;
+// merged down to a few clusters of thousands of faces each it is quadratic (a closed tetrahedron
+// subdivided six times, 16k faces, rebuilt from single faces toward its 4 clusters: 78 s). Over
+// libcgal-demo at faces / 10 and / 40 (also with --gradation 1) one call scored at most 77 faces
+// per face of the components it merged (b9_mesh -> 254). When the budget is spent merge_down
+// stops where it is: those components stay above their targets, as where no merge fits.
+constexpr uint64_t kScoredFacesPerFace = 512;
+struct MergeBudget {
+  uint64_t left = UINT64_MAX;
+};
+
 // Merges adjacent clusters of a valid clustering, cheapest energy first, until every component
 // holds its target count, taking only merges that keep the dual valid: the merged cluster is fit
 // (RegionCheck: a disk, one border with each neighbour, enough neighbours), the clusters next to
@@ -1202,7 +1218,7 @@ void replace_component(const Topology& topology, std::vector<uint32_t>& base, co
 // leave some cluster with two neighbours).
 uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck& check, CornerPolygons& corners,
                     const BoundaryLoops& boundary_loops, std::vector<uint32_t>& labels, uint32_t clusters,
-                    const std::vector<uint32_t>& targets, bool by_weight = false) {
+                    const std::vector<uint32_t>& targets, MergeBudget& budget, bool by_weight = false) {
   ClusterView view = view_of(topology, data, labels, clusters);
   // The boundary loops each cluster meets, and how many clusters meet each loop.
   std::vector<std::vector<uint32_t>> loops = boundary_loops.of_clusters(labels, clusters);
@@ -1324,7 +1340,11 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
     uint32_t a = e.a, b = e.b;
     if (!alive[a] || !alive[b] || e.stamp_a != stamp[a] || e.stamp_b != stamp[b]) continue;  // stale
     uint32_t component = view.component[a];
-    if (count[component] <= targets[component] || !fit(a, b)) continue;
+    if (count[component] <= targets[component]) continue;
+    const uint64_t cost = members[a].size() + members[b].size();
+    if (cost > budget.left) break;
+    budget.left -= cost;
+    if (!fit(a, b)) continue;
     // b joins a
     for (uint32_t f : members[b]) labels[f] = a;
     members[a].insert(members[a].end(), members[b].begin(), members[b].end());
@@ -1556,15 +1576,15 @@ std::vector<uint32_t> flip_then_merge(const Mesh& mesh, const Topology& topology
 std::vector<uint32_t> merge_down_twice(const Topology& topology, const FaceData& data, RegionCheck& check,
                                        CornerPolygons& corners, const BoundaryLoops& boundary_loops,
                                        const std::vector<uint32_t>& labels,
-                                       uint32_t clusters, const std::vector<uint32_t>& targets) {
+                                       uint32_t clusters, const std::vector<uint32_t>& targets, MergeBudget& budget) {
   std::vector<uint32_t> by_energy = labels;
-  merge_down(topology, data, check, corners, boundary_loops, by_energy, clusters, targets);
+  merge_down(topology, data, check, corners, boundary_loops, by_energy, clusters, targets, budget);
   std::vector<uint32_t> held = clusters_per_component(topology, by_energy, *std::max_element(by_energy.begin(), by_energy.end()) + 1);
   bool stuck = false;
   for (size_t c = 0; c < targets.size(); ++c) stuck = stuck || held[c] > targets[c];
   if (!stuck) return by_energy;
   std::vector<uint32_t> by_weight = labels;
-  merge_down(topology, data, check, corners, boundary_loops, by_weight, clusters, targets, true);
+  merge_down(topology, data, check, corners, boundary_loops, by_weight, clusters, targets, budget, true);
   std::vector<uint32_t> held_w = clusters_per_component(topology, by_weight, *std::max_element(by_weight.begin(), by_weight.end()) + 1);
   // Take each stuck component from the weight order where that one reached its target.
   for (size_t c = 0; c < targets.size(); ++c)
@@ -1594,8 +1614,18 @@ std::vector<uint32_t> merge_down_with_flips(const Mesh& mesh, const Topology& to
                                             const std::vector<uint32_t>& labels, uint32_t clusters,
                                             const std::vector<uint32_t>& targets, DefectsOf defects_of) {
   constexpr uint32_t kMaxFlips = 64;
+  MergeBudget budget;  // kScoredFacesPerFace per face of the components above their targets
+  {
+    const std::vector<uint32_t> held = clusters_per_component(topology, labels, clusters);
+    uint64_t faces = 0;
+    for (size_t f = 0; f < labels.size(); ++f) {
+      const uint32_t c = topology.face_component[f];
+      faces += held[c] > targets[c];
+    }
+    budget.left = kScoredFacesPerFace * faces;
+  }
   std::vector<uint32_t> result =
-      merge_down_twice(topology, data, check, corners, boundary_loops, labels, clusters, targets);
+      merge_down_twice(topology, data, check, corners, boundary_loops, labels, clusters, targets, budget);
   for (uint32_t flips = 0;; ++flips) {
     uint32_t count = *std::max_element(result.begin(), result.end()) + 1;
     std::vector<uint32_t> held = clusters_per_component(topology, result, count);
@@ -1606,7 +1636,7 @@ std::vector<uint32_t> merge_down_with_flips(const Mesh& mesh, const Topology& to
         flip_then_merge(mesh, topology, data, check, corners, result, count, targets, defects_of);
     if (flipped.empty()) return result;
     result = std::move(flipped);
-    merge_down(topology, data, check, corners, boundary_loops, result, count - 1, targets);
+    merge_down(topology, data, check, corners, boundary_loops, result, count - 1, targets, budget);
   }
 }
 
@@ -2028,16 +2058,26 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
     std::vector<uint32_t> direct = result.labels;
     uint32_t next_id = n, selected = 0;
     std::vector<uint32_t> targets = clusters_per_component(topology, result.labels, n);
-    for (uint32_t c = 0; c < topology.component_count; ++c)
-      if (broken[c] > 0 && out.allocation.faces[c] <= kMaxFacesPerFaceStart) {
+    std::vector<uint8_t> face_start(topology.component_count, 0);  // rebuilt from single faces
+    {
+      std::vector<uint32_t> candidates;  // broken, smallest first (ties: lower id)
+      for (uint32_t c = 0; c < topology.component_count; ++c)
+        if (broken[c] > 0) candidates.push_back(c);
+      std::stable_sort(candidates.begin(), candidates.end(), [&](uint32_t x, uint32_t y) {
+        return out.allocation.faces[x] < out.allocation.faces[y];
+      });
+      uint64_t taken = 0;
+      for (uint32_t c : candidates) {
+        if (taken + out.allocation.faces[c] > kMaxFacesPerFaceStart) break;
+        taken += out.allocation.faces[c];
+        face_start[c] = 1;
         targets[c] = out.allocation.clusters[c];
         ++selected;
       }
+    }
     if (selected > 0) {
-      for (size_t f = 0; f < direct.size(); ++f) {
-        uint32_t c = topology.face_component[f];
-        if (broken[c] > 0 && out.allocation.faces[c] <= kMaxFacesPerFaceStart) direct[f] = next_id++;
-      }
+      for (size_t f = 0; f < direct.size(); ++f)
+        if (face_start[topology.face_component[f]]) direct[f] = next_id++;
       std::vector<uint32_t> start_counts = clusters_per_component(topology, direct, next_id);
       direct = merge_down_with_flips(mesh, topology, data, check, corners, boundary_loops, direct, next_id, targets,
                                      defects_of);
@@ -2046,7 +2086,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
       std::vector<uint32_t> composed = result.labels;
       uint32_t replaced = 0, merges = 0;
       for (uint32_t c = 0; c < topology.component_count; ++c)
-        if (broken[c] > 0 && out.allocation.faces[c] <= kMaxFacesPerFaceStart && held[c] == out.allocation.clusters[c]) {
+        if (face_start[c] && held[c] == out.allocation.clusters[c]) {
           replace_component(topology, composed, direct, c);
           ++replaced;
           merges += start_counts[c] - held[c];

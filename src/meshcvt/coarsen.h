@@ -367,8 +367,9 @@ struct CoarsenMeshResult {
   /// clustering was made and then merged back to n (merged_back merges); 0 when not used.
   uint32_t refined_clusters = 0;
   uint32_t merged_back = 0;
-  /// Components (of at most 65536 faces) still broken after that, rebuilt from one cluster per
-  /// face merged down to their count (their merges are counted in merged_back).
+  /// Components (at most 65536 faces in all, smallest first) still broken after that, rebuilt
+  /// from one cluster per face merged down to their count (their merges are counted in
+  /// merged_back).
   uint32_t face_start_components = 0;
   size_t abandoned_fixes = 0;        ///< fixes made on attempts that were not kept (not in `fixes`)
   /// Defects are left (coarse.defects): no attempt removed them all; `clustering` is then the one
@@ -415,9 +416,11 @@ struct CoarsenMeshResult {
 ///     condition of an edge contraction, and every corner of four or more clusters keeping a
 ///     triangulation without an edge used twice) and replaces them; where greedy merging stops
 ///     above n (near the fewest vertices the surface allows), a dual edge flip (a strip of faces
-///     along a border handed to the cluster at its end) opens a merge again; then components of at
-///     most 65536 faces still broken are rebuilt from one cluster per face merged down the same
-///     way. Fix rounds that come back to labels they had before stop (a cycle);
+///     along a border handed to the cluster at its end) opens a merge again; then components
+///     still broken, smallest first up to 65536 faces in all, are rebuilt from one cluster per face
+///     merged down the same way. The merging has a work budget (512 faces checked per face merged):
+///     where it is spent, the components stay as they were. Fix rounds that come back to labels
+///     they had before stop (a cycle);
 ///  5. coarsen_clustering of the clustering with the fewest defects.
 /// Degenerate triangles (geometry, not topology) are not fixed.
 ///
