@@ -46,6 +46,11 @@ ClusterProblem make_cluster_problem(const Mesh& mesh, const ClusterOptions& opti
     }
   float extent = 0;
   for (int c = 0; c < 3; ++c) extent = std::max(extent, hi[c] - lo[c]);
+  // Wider than the float range (coordinates near +-3.4e38 on both sides): the normalized faces'
+  // areas would overflow, and the fixed-point scale below with them.
+  if (std::isinf(extent))
+    throw OptionError("the mesh spans more than the float range (its bounding box is wider than 3.4e38): scale it "
+                      "down");
   if (!(extent > 0) || !std::isfinite(extent)) extent = 1;
   for (int c = 0; c < 3; ++c) pr.origin[c] = nv ? lo[c] : 0;
   pr.extent = extent;
@@ -87,6 +92,7 @@ ClusterProblem make_cluster_problem(const Mesh& mesh, const ClusterOptions& opti
   });
   double total = 0;  // in face order, as it always was: fixed_scale below depends on it
   for (size_t f = 0; f < nf; ++f) total += pr.weight[f];
+  if (!std::isfinite(total)) throw OptionError("the mesh's total area is not finite (a coordinate is NaN or infinite)");
   if (!(total > 0)) throw OptionError("the mesh has zero total area: nothing to cluster");
   // Every sum is bounded by 3 * total weight (|p|^2 <= 3 in the unit box; 1 for normals).
   pr.fixed_scale = std::ldexp(1.0, 61 - int(std::ceil(std::log2(3.0 * total))));

@@ -427,6 +427,32 @@ TEST_CASE("bad cluster counts are clear errors naming the numbers") {
   }
 }
 
+TEST_CASE("a mesh wider than the float range, or with a NaN corner, is a clear error") {
+  // Two unit spheres scaled by s, at -3s and +3s along x: 8s wide. At s = 1e38 that is wider
+  // than FLT_MAX (until the twenty-fourth session this overflowed the areas and the fixed-point
+  // scale's int conversion, which UBSan reports); at 1e37 it fits.
+  for (const float s : {1e38f, 1e37f}) {
+    Mesh m = test::icosphere(1);
+    for (float& x : m.positions) x *= s;
+    Mesh far = m;
+    for (size_t i = 0; i < m.positions.size(); i += 3) m.positions[i] -= 3 * s, far.positions[i] += 3 * s;
+    const Mesh both = test::combine(m, far, 0);
+    ClusterOptions o;
+    o.clusters = 8;
+    if (s == 1e38f) {
+      CHECK_THROWS_WITH_AS(cluster(both, o), doctest::Contains("float range"), OptionError);
+    } else {  // as wide as a float allows, and fine
+      const Clustering c = cluster(both, o);
+      CHECK(c.labels.size() == both.face_count());
+    }
+  }
+  Mesh nan_corner = test::icosphere(1);
+  nan_corner.positions[4] = NAN;
+  ClusterOptions o;
+  o.clusters = 8;
+  CHECK_THROWS_WITH_AS(cluster(nan_corner, o), doctest::Contains("NaN"), OptionError);
+}
+
 TEST_CASE("final guarantees: exactly n connected, non-isolated clusters, every face labeled") {
   std::vector<Case> meshes = descent_meshes();
   for (const Case& cs : meshes) {
