@@ -94,4 +94,14 @@ for option in --fit-swap-angle --fit-min-angle; do
     [ ! -e "$tmp/bad.off" ] || fail "$option $angle wrote a file"
   done
 done
+
+# qem asked for more vertices than the input has: a note says what to expect and what suits better;
+# below that, nothing is said.
+"$cli" coarsen "$data/elephant.off" -n 2775 --vertex qem --subdivide 0 -o "$tmp/fine.off" --no-error \
+  >"$tmp/out" 2>"$tmp/err" || fail "qem -> 2775: $(cat "$tmp/err")"
+grep -q "^meshcvt: note: .*elephant.off: --vertex qem with n = 2775, not below the input's 2775 vertices: .*projected" \
+  "$tmp/err" || fail "qem -> 2775: no note: $(cat "$tmp/err")"
+"$cli" coarsen "$data/elephant.off" -n 2774 --vertex qem --subdivide 0 -o "$tmp/fine.off" --no-error \
+  >"$tmp/out" 2>"$tmp/err" || fail "qem -> 2774: $(cat "$tmp/err")"
+grep -q "not below the input" "$tmp/err" && fail "qem -> 2774: note: $(cat "$tmp/err")"
 echo ok
