@@ -316,7 +316,8 @@ def main():
                     help="no count above the faces (those subdivide first: 20-30 s each on the elephant with "
                          "qem, ten times that under ASan), for a test")
     ap.add_argument("--slow", type=float, default=0.0, metavar="S",
-                    help="also print the runs that took more than S seconds (not failures; 0: off)")
+                    help="also print the runs that took more than S seconds, kept in WORK/slow-N (not failures; "
+                         "0: off)")
     ap.add_argument("--gpu", type=float, default=0.0, metavar="SHARE",
                     help="share of cluster and coarsen runs given --device gpu (default 0)")
     a = ap.parse_args()
@@ -324,7 +325,7 @@ def main():
     seeds = [(m, read_off(m)) for m in a.meshes]
     os.makedirs(a.work, exist_ok=True)
     end = time.time() + a.seconds
-    runs = failures = 0
+    runs = failures = slow = 0
     outcomes = {}
     while (a.runs == 0 or runs < a.runs) and (a.runs > 0 or time.time() < end):
         name, mesh = rng.choice(seeds)
@@ -336,8 +337,14 @@ def main():
         took = time.time() - started
         runs += 1
         if a.slow > 0 and took > a.slow:
-            print("SLOW %.1f s (%s; %s) %s" % (took, os.path.basename(name), "; ".join(steps), " ".join(args[1:])),
-                  flush=True)
+            slow += 1
+            keep = os.path.join(a.work, "slow-%d" % slow)
+            shutil.rmtree(keep, ignore_errors=True)
+            shutil.copytree(run_dir, keep)
+            with open(os.path.join(keep, "cmd.txt"), "w") as o:
+                o.write("seed mesh: %s\ndamage: %s\n%s\n" % (name, "; ".join(steps), " ".join(args)))
+            print("SLOW %d: %.1f s (%s; %s) %s" % (slow, took, os.path.basename(name), "; ".join(steps),
+                                                  " ".join(args[1:])), flush=True)
         key = "error" if "meshcvt: error" in err else "ok"
         outcomes[key] = outcomes.get(key, 0) + 1
         if problem:
