@@ -336,28 +336,26 @@ def main():
         problem, args, steps, err = one_run(rng, a.meshcvt, mesh, run_dir, a.timeout, a.gpu, a.light)
         took = time.time() - started
         runs += 1
+        def keep(kind, number, what):
+            """Copies the run to WORK/kind-number with its command and stderr; prints a line."""
+            kept = os.path.join(a.work, "%s-%d" % (kind, number))
+            shutil.rmtree(kept, ignore_errors=True)
+            shutil.copytree(run_dir, kept)
+            with open(os.path.join(kept, "cmd.txt"), "w") as o:
+                o.write("seed mesh: %s\ndamage: %s\n%s\n" % (name, "; ".join(steps), " ".join(args)))
+            with open(os.path.join(kept, "stderr.txt"), "w") as o:
+                o.write(err)
+            print("%s %d: %s (%s; %s) %s" % (kind.upper(), number, what, os.path.basename(name), "; ".join(steps),
+                                             " ".join(args[1:])), flush=True)
+
         if a.slow > 0 and took > a.slow:
             slow += 1
-            keep = os.path.join(a.work, "slow-%d" % slow)
-            shutil.rmtree(keep, ignore_errors=True)
-            shutil.copytree(run_dir, keep)
-            with open(os.path.join(keep, "cmd.txt"), "w") as o:
-                o.write("seed mesh: %s\ndamage: %s\n%s\n" % (name, "; ".join(steps), " ".join(args)))
-            print("SLOW %d: %.1f s (%s; %s) %s" % (slow, took, os.path.basename(name), "; ".join(steps),
-                                                  " ".join(args[1:])), flush=True)
+            keep("slow", slow, "%.1f s" % took)
         key = "error" if "meshcvt: error" in err else "ok"
         outcomes[key] = outcomes.get(key, 0) + 1
         if problem:
             failures += 1
-            keep = os.path.join(a.work, "fail-%d" % failures)
-            shutil.rmtree(keep, ignore_errors=True)
-            shutil.copytree(run_dir, keep)
-            with open(os.path.join(keep, "cmd.txt"), "w") as o:
-                o.write("seed mesh: %s\ndamage: %s\n%s\n" % (name, "; ".join(steps), " ".join(args)))
-            with open(os.path.join(keep, "stderr.txt"), "w") as o:
-                o.write(err)
-            print("FAIL %d: %s (%s; %s) %s" % (failures, problem, os.path.basename(name), "; ".join(steps),
-                                               " ".join(args[1:])), flush=True)
+            keep("fail", failures, problem)
     print("%d runs, %d failures; %s" % (runs, failures, ", ".join("%s %d" % kv for kv in sorted(outcomes.items()))))
     return 1 if failures else 0
 
