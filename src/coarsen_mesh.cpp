@@ -1196,8 +1196,9 @@ void replace_component(const Topology& topology, std::vector<uint32_t>& base, co
 // merged down to a few clusters of thousands of faces each it is quadratic (a closed tetrahedron
 // subdivided six times, 16k faces, rebuilt from single faces toward its 4 clusters: 78 s). Over
 // libcgal-demo at faces / 10 and / 40 (also with --gradation 1) one call scored at most 77 faces
-// per face of the components it merged (b9_mesh -> 254). When the budget is spent merge_down
-// stops where it is: those components stay above their targets, as where no merge fits.
+// per face of the components it merged (b9_mesh -> 254), and with this budget every output there
+// is the same. When the budget is spent merge_down stops where it is: those components stay above
+// their targets, as where no merge fits.
 constexpr uint64_t kScoredFacesPerFace = 512;
 struct MergeBudget {
   uint64_t left = UINT64_MAX;
