@@ -243,7 +243,9 @@ def one_run(rng, meshcvt, seed_mesh, run_dir, timeout, gpu_share=0.0, light=Fals
     command = rng.choice(["coarsen", "coarsen", "coarsen", "cluster", "approximate"])
     out = os.path.join(run_dir, "out.off")
     labels = os.path.join(run_dir, "labels.txt")
-    args = [meshcvt, command, mesh_path, "-n", str(n), "-o", out, "-q"]
+    # (Not quiet: the coarsen check below accepts another vertex count only with the warning that
+    # defects remain, which -q would hide.)
+    args = [meshcvt, command, mesh_path, "-n", str(n), "-o", out]
     if command == "coarsen":
         args += ["--no-error"]
         args += rng.choice([[], ["--vertex", "qem"], ["--vertex", "closest"], ["--gradation", "1"],
