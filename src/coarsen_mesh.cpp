@@ -1678,7 +1678,7 @@ class FixLoop {
     out.labels = labels;
     out.defects = known_defects ? *known_defects : defects_of(labels, ro.clusters);
     if (source) out.clustering = *source;
-    first_round_ = first_round;
+    next_round_ = first_round;
     clusters_ = ro.clusters;
     fix_rounds(out, labels);
     if (!out.defects.empty() || !smooth || out.clustering) return out;
@@ -1696,10 +1696,10 @@ class FixLoop {
     again.labels = labels;
     again.defects = std::move(defects);
     fix_rounds(again, labels);
+    out.rounds += again.rounds;  // run, kept or not (the fixes are reported only where kept)
     if (again.defects.empty()) {
       out.labels = std::move(again.labels);
       out.fixes.insert(out.fixes.end(), again.fixes.begin(), again.fixes.end());
-      out.rounds += again.rounds;
       return out;
     }
     // In steps from the valid labels: a step whose result is valid, or made valid again by fix
@@ -1716,6 +1716,7 @@ class FixLoop {
         repaired.defects = std::move(d);
         std::vector<uint32_t> work = c.labels;
         fix_rounds(repaired, work);
+        out.rounds += repaired.rounds;
         if (!repaired.defects.empty()) {
           step /= 2;
           continue;
@@ -1724,7 +1725,6 @@ class FixLoop {
         out.labels = std::move(repaired.labels);
         out.clustering.reset();
         out.fixes.insert(out.fixes.end(), repaired.fixes.begin(), repaired.fixes.end());
-        out.rounds += repaired.rounds;
         step *= 2;
         continue;
       }
@@ -1758,9 +1758,10 @@ class FixLoop {
     for (uint32_t r = 0; !defects.empty() && r < options_.max_fix_rounds; ++r) {
       ClusterView view = view_of(topology_, data_, labels, clusters);
       std::vector<CoarsenFix> fixes =
-          fix_round(topology_, view, defects, first_round_ + out.rounds, cutter_, check_, corners_, labels);
+          fix_round(topology_, view, defects, next_round_, cutter_, check_, corners_, labels);
       if (fixes.empty()) break;  // nothing this loop can change any more
       ++out.rounds;
+      ++next_round_;
       for (CoarsenFix& f : fixes) f.clusters = clusters;
       out.fixes.insert(out.fixes.end(), fixes.begin(), fixes.end());
       defects = defects_of(labels, clusters);
@@ -1787,7 +1788,7 @@ class FixLoop {
   CornerPolygons& corners_;
   ClusterCutter& cutter_;
   const std::vector<float>* weights_;
-  uint32_t first_round_ = 1, clusters_ = 0;
+  uint32_t next_round_ = 1, clusters_ = 0;  // the number the next fix round takes (over all its fix_rounds)
 };
 
 }  // namespace

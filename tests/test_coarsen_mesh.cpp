@@ -266,6 +266,9 @@ TEST_CASE("coarsen_mesh: the elephant (genus 3) at small and large n, every fix 
         CHECK(f.other < f.clusters);
       }
     }
+    // Rounds are numbered in the order they ran, whether their labels were kept or not.
+    CHECK(std::is_sorted(r.fixes.begin(), r.fixes.end(),
+                         [](const CoarsenFix& a, const CoarsenFix& b) { return a.round < b.round; }));
     some_fix = some_fix || !r.fixes.empty();
   }
   // The plain clustering has defects at some of these counts (what makes this test able to fail).
