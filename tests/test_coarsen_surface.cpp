@@ -279,7 +279,8 @@ TEST_CASE("coarsen_surface: the partial fallback finds the broken component past
 
 TEST_CASE("coarsen_surface: where defects remain, the input subdivided once is tried and kept if it has fewer") {
   // The retry coarsens the input subdivided once, as subdivide = 1 would, and keeps the result
-  // with fewer defects; none runs when a subdivision is asked for or retry_subdivided is off.
+  // with fewer defects; none runs when a subdivision is asked for, retry_subdivided is off or the
+  // surface subdivided would have more than max_retry_faces faces.
   auto check_retry = [](const Mesh& mesh, CoarsenSurfaceOptions o) {
     CoarsenSurfaceOptions no_retry = o, once = o, explicit_zero = o;
     no_retry.retry_subdivided = false;
@@ -308,6 +309,12 @@ TEST_CASE("coarsen_surface: where defects remain, the input subdivided once is t
     if (b < a) CHECK(r.job.coarse.mesh.positions == finer.job.coarse.mesh.positions);
     CHECK(r.discarded_job_defects == int64_t(std::max(a, b)));
     check_origin(mesh, r);
+    // The limit is on the surface subdivided: four times the faces.
+    CoarsenSurfaceOptions at_limit = o, below = o;
+    at_limit.max_retry_faces = 4 * mesh.face_count();
+    below.max_retry_faces = 4 * mesh.face_count() - 1;
+    CHECK(coarsen_surface(mesh, at_limit).jobs.size() == 2);
+    CHECK(coarsen_surface(mesh, below).jobs.empty());
   };
   const Mesh elephant = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
   SUBCASE("the elephant without fix rounds") {

@@ -492,9 +492,11 @@ struct CoarsenSurfaceOptions {
   /// over the faces; 0.03-0.1 s on 4.8M faces); they are always counted otherwise.
   bool count_long_edges = true;
   /// Where defects remain and subdivide is kSubdivideByPlacement: coarsen the surface as given
-  /// (without a long-edge split) subdivided once too (up to 2^20 faces), and keep it if it has
-  /// fewer defects.
+  /// (without a long-edge split) subdivided once too, and keep it if it has fewer defects.
   bool retry_subdivided = true;
+  /// The retry runs only where the surface subdivided once has at most this many faces (four
+  /// times the surface's): a job there costs several times the first one.
+  uint64_t max_retry_faces = uint64_t(1) << 20;
   /// Subdivide (subdivide_faces) each component with fewer faces than the clusters it needs to
   /// come out as a valid surface (describe_components' minimum: 3 for a lone triangle), until it
   /// has enough, instead of refusing the mesh (as coarsen_mesh does when this is false). A face
