@@ -444,6 +444,41 @@ void solve_quadric(const double q[9], const double bb[6], const double c[3], dou
 
 // topology: when given, clusters also take a share of the planes across their border (see below),
 // except those flagged in own_planes_only (when not null).
+// Flags (keeps_own[max(i, j)] = 1) each pair of the clusters `order` whose points are within
+// min(reach[i], reach[j]) of each other: a sweep along a direction oblique to every axis, each
+// point looking ahead as far as its own reach (a close pair is within reach[i] of i, and no
+// farther apart along a unit direction). Along x, as before, the sweep was quadratic on CAD
+// models, whose points share x across a whole plane (a damaged fandisk at twice its faces with
+// qem: 84.6 s, 8.5 s now); the pairs found are the same.
+void mark_close_points(const std::vector<double>& points, const std::vector<double>& reach,
+                       const std::vector<uint32_t>& order, std::vector<uint8_t>& keeps_own) {
+  // (1, 2, 3) / sqrt(14) - no axis-aligned plane or 45-degree plane is perpendicular to it.
+  const double norm = std::sqrt(14.0), w[3] = {1 / norm, 2 / norm, 3 / norm};
+  std::vector<std::pair<double, uint32_t>> along;  // (position along w, cluster), sorted
+  along.reserve(order.size());
+  double scale = 0;
+  for (uint32_t i : order) {
+    const double* p = &points[3 * size_t(i)];
+    along.push_back({w[0] * p[0] + w[1] * p[1] + w[2] * p[2], i});
+    for (int d = 0; d < 3; ++d) scale = std::max(scale, std::fabs(p[d]));
+  }
+  std::sort(along.begin(), along.end());
+  // Rounding of the positions along w stays far below a millionth of a millionth of the scale.
+  const double slack = 1e-12 * scale;
+  for (size_t k = 0; k < along.size(); ++k) {
+    const uint32_t i = along[k].second;
+    const double* p = &points[3 * size_t(i)];
+    const double limit = along[k].first + reach[i] + slack;
+    for (size_t m = k + 1; m < along.size() && along[m].first <= limit; ++m) {
+      const uint32_t j = along[m].second;
+      const double* q = &points[3 * size_t(j)];
+      const double gap2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
+      const double close = std::min(reach[i], reach[j]);
+      if (gap2 <= close * close) keeps_own[std::max(i, j)] = 1;
+    }
+  }
+}
+
 std::vector<float> place_qem(const Mesh& mesh, const Topology* topology, const std::vector<uint32_t>& labels,
                              uint32_t clusters, const std::vector<double>& centroids,
                              const std::vector<float>* face_weights, const std::vector<uint8_t>* own_planes_only) {
@@ -532,22 +567,7 @@ std::vector<float> place_qem(const Mesh& mesh, const Topology* topology, const s
   if (topology && kBorderPlaneShare > 0) {
     std::vector<uint8_t> keeps_own(clusters, 0);
     if (own_planes_only) keeps_own = *own_planes_only;
-    std::vector<uint32_t> by_x = order;
-    std::sort(by_x.begin(), by_x.end(), [&](uint32_t a, uint32_t b) {
-      return points[3 * size_t(a)] != points[3 * size_t(b)] ? points[3 * size_t(a)] < points[3 * size_t(b)] : a < b;
-    });
-    const double widest = by_x.empty() ? 0 : *std::max_element(reach.begin(), reach.end());
-    for (size_t k = 0; k < by_x.size(); ++k) {
-      const uint32_t i = by_x[k];
-      const double* p = &points[3 * size_t(i)];
-      for (size_t m = k + 1; m < by_x.size() && points[3 * size_t(by_x[m])] - p[0] <= widest; ++m) {
-        const uint32_t j = by_x[m];
-        const double* q = &points[3 * size_t(j)];
-        const double gap2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
-        const double close = std::min(reach[i], reach[j]);
-        if (gap2 <= close * close) keeps_own[std::max(i, j)] = 1;
-      }
-    }
+    mark_close_points(points, reach, order, keeps_own);
     for (uint32_t i : order)
       if (keeps_own[i]) solve(i, false);
   }

@@ -744,6 +744,35 @@ TEST_CASE("coarsen: qem on a flat cluster lies in its plane, at a cube corner re
   CHECK(centroid[0] < 0.9f);  // the centroid itself is well inside
 }
 
+TEST_CASE("coarsen: of the qem points pulled onto one cube corner, the first cluster's stays there") {
+  // Each face of the unit cube in four quadrants, one cluster each: at every corner three
+  // clusters meet, and each one's lent planes (the two other faces across its two creases) pull
+  // its point onto the corner. Coincident points would make degenerate triangles, so of each
+  // close pair the later cluster keeps the point of its own plane, its mass centroid; the first
+  // keeps the corner. Points on three planes per axis, many sharing a coordinate.
+  Mesh box = cube(3);
+  std::vector<uint32_t> labels(box.face_count());
+  for (size_t f = 0; f < box.face_count(); ++f) {
+    double m[3] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 3; ++d) m[d] += box.positions[3 * box.indices[3 * f + k] + d] / 3.0;
+    int axis = 0;  // the axis the face is normal to: its coordinate is 0 or 1 at every corner
+    for (int d = 0; d < 3; ++d)
+      if (m[d] < 1e-9 || m[d] > 1 - 1e-9) axis = d;
+    const uint32_t corner = (m[0] > 0.5) | (m[1] > 0.5) << 1 | (m[2] > 0.5) << 2;
+    labels[f] = 3 * corner + uint32_t(axis);
+  }
+  std::vector<float> q = place_cluster_vertices(box, labels, 24, VertexPlacement::qem);
+  std::vector<float> c = cluster_mass_centroids(box, labels, 24);
+  for (uint32_t corner = 0; corner < 8; ++corner) {
+    CAPTURE(corner);
+    const float at[3] = {float(corner & 1), float(corner >> 1 & 1), float(corner >> 2 & 1)};
+    for (int d = 0; d < 3; ++d) CHECK(q[3 * (3 * corner) + d] == doctest::Approx(at[d]).epsilon(1e-6));
+    for (uint32_t i = 3 * corner + 1; i < 3 * corner + 3; ++i)
+      for (int d = 0; d < 3; ++d) CHECK(q[3 * i + d] == doctest::Approx(c[3 * i + d]).epsilon(1e-5));
+  }
+}
+
 TEST_CASE("coarsen: qem points of two flat clusters meeting at a crease lie on the crease") {
   // An 8 x 4 grid folded up by 90 degrees along x = 4: a floor (cluster 0, 4 x 4) and a wall
   // (cluster 1, 4 x 2). Each cluster's own planes are one plane, which leaves its point at its
