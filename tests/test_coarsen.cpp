@@ -165,6 +165,19 @@ Mesh cube(int levels) {
   return subdivide(c, levels).mesh;
 }
 
+// A label per face of `m`, label_of(centroid) (3 doubles).
+template <typename LabelOf>
+std::vector<uint32_t> labels_by_centroid(const Mesh& m, LabelOf label_of) {
+  std::vector<uint32_t> labels(m.face_count());
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    double c[3] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 3; ++d) c[d] += m.positions[3 * m.indices[3 * f + k] + d] / 3.0;
+    labels[f] = label_of(c);
+  }
+  return labels;
+}
+
 // ---- an independent look at the output
 
 struct Surface {
@@ -731,13 +744,8 @@ TEST_CASE("coarsen: qem on a flat cluster lies in its plane, at a cube corner re
 
   // The three quarter-faces around the corner (1,1,1) of the unit cube.
   Mesh box = cube(3);
-  std::vector<uint32_t> labels(box.face_count());
-  for (size_t f = 0; f < box.face_count(); ++f) {
-    double m[3] = {0, 0, 0};
-    for (int k = 0; k < 3; ++k)
-      for (int d = 0; d < 3; ++d) m[d] += box.positions[3 * box.indices[3 * f + k] + d] / 3.0;
-    labels[f] = m[0] > 0.5 && m[1] > 0.5 && m[2] > 0.5 ? 0 : 1;
-  }
+  std::vector<uint32_t> labels =
+      labels_by_centroid(box, [](const double* m) { return m[0] > 0.5 && m[1] > 0.5 && m[2] > 0.5 ? 0u : 1u; });
   std::vector<float> corner = place_cluster_vertices(box, labels, 2, VertexPlacement::qem);
   for (int d = 0; d < 3; ++d) CHECK(corner[d] == doctest::Approx(1.0).epsilon(1e-6));
   std::vector<float> centroid = cluster_mass_centroids(box, labels, 2);
@@ -751,17 +759,13 @@ TEST_CASE("coarsen: of the qem points pulled onto one cube corner, the first clu
   // close pair the later cluster keeps the point of its own plane, its mass centroid; the first
   // keeps the corner. Points on three planes per axis, many sharing a coordinate.
   Mesh box = cube(3);
-  std::vector<uint32_t> labels(box.face_count());
-  for (size_t f = 0; f < box.face_count(); ++f) {
-    double m[3] = {0, 0, 0};
-    for (int k = 0; k < 3; ++k)
-      for (int d = 0; d < 3; ++d) m[d] += box.positions[3 * box.indices[3 * f + k] + d] / 3.0;
+  std::vector<uint32_t> labels = labels_by_centroid(box, [](const double* m) {
     int axis = 0;  // the axis the face is normal to: its coordinate is 0 or 1 at every corner
     for (int d = 0; d < 3; ++d)
       if (m[d] < 1e-9 || m[d] > 1 - 1e-9) axis = d;
     const uint32_t corner = (m[0] > 0.5) | (m[1] > 0.5) << 1 | (m[2] > 0.5) << 2;
-    labels[f] = 3 * corner + uint32_t(axis);
-  }
+    return 3 * corner + uint32_t(axis);
+  });
   std::vector<float> q = place_cluster_vertices(box, labels, 24, VertexPlacement::qem);
   std::vector<float> c = cluster_mass_centroids(box, labels, 24);
   for (uint32_t corner = 0; corner < 8; ++corner) {
