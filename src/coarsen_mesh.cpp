@@ -1173,8 +1173,8 @@ std::vector<CoarsenFix> fix_round(const Topology& topology, const ClusterView& v
 
   if (cuts.empty()) return fixes;
   MergeFinder merges(view, check, corners);
-  for (const Cut& cut : cuts) {
-    ClusterCutter::Plan plan = cut.plan;
+  for (Cut& cut : cuts) {
+    ClusterCutter::Plan plan = std::move(cut.plan);
     if (!(plan.score < 10))
       plan = cutter.plan(view, labels, cut.target, cut.partner, cut.defect.kind == DualDefect::boundary_arcs);
     if (!(plan.score < 10)) continue;  // no cut gives fit pieces: leave it to a later round
