@@ -62,6 +62,7 @@
 #include <span>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -371,8 +372,8 @@ class RegionCheck {
         if (o != kNone && piece_[o] == p) continue;
         ++border;
         uint32_t id = o == kNone ? kBoundary : piece_[o] != kOutside ? kPiece + piece_[o] : labels[o];
-        ends_.push_back({id, t[e]});
-        ends_.push_back({id, t[(e + 1) % 3]});
+        ends_.push_back(end_key(id, t[e]));
+        ends_.push_back(end_key(id, t[(e + 1) % 3]));
       }
     }
     if (2 * vertices - int64_t(count) - border != 2) s += 100;  // 2 chi = 2V - 2E + 2F, 2E = 3F + B
@@ -384,13 +385,13 @@ class RegionCheck {
     for (size_t i = 0; i < ends_.size();) {
       size_t j = i;
       uint32_t chain_ends = 0;
-      while (j < ends_.size() && ends_[j].first == ends_[i].first) {
+      while (j < ends_.size() && end_id(ends_[j]) == end_id(ends_[i])) {
         size_t k = j;
         while (k < ends_.size() && ends_[k] == ends_[j]) ++k;
         chain_ends += k - j == 1;
         j = k;
       }
-      if (ends_[i].first == kBoundary)
+      if (end_id(ends_[i]) == kBoundary)
         open = true;
       else
         ++neighbours;
@@ -410,12 +411,13 @@ class RegionCheck {
   uint32_t boundary_corner_neighbours(uint8_t p, const std::vector<uint32_t>& labels) {
     uint32_t found[2] = {kNone, kNone}, count = 0;
     auto bordering = [&](uint32_t id) {
-      for (const auto& e : ends_)
-        if (e.first == id) return true;
+      for (uint64_t e : ends_)
+        if (end_id(e) == id) return true;
       return false;
     };
-    for (const auto& [id, v] : ends_) {
-      if (id != kBoundary) continue;
+    for (uint64_t e : ends_) {
+      if (end_id(e) != kBoundary) continue;
+      const uint32_t v = uint32_t(e);
       for (uint32_t i = topology_.vertex_face_offsets[v]; i < topology_.vertex_face_offsets[v + 1] && count < 2; ++i) {
         const uint32_t g = topology_.vertex_faces[i];
         if (piece_[g] == p) continue;
@@ -434,7 +436,11 @@ class RegionCheck {
   std::vector<uint32_t> vertex_stamp_;
   uint32_t stamp_ = 0;
   std::vector<uint32_t> queue_;
-  std::vector<std::pair<uint32_t, uint32_t>> ends_;  // (neighbour id, vertex) per end of a border edge
+  // Per end of a border edge: (neighbour id, vertex) as one key, id in the high half, so that the
+  // keys sort as the pairs would (one comparison instead of two: the sort was 9% of cheese -> 444).
+  std::vector<uint64_t> ends_;
+  static uint64_t end_key(uint32_t id, uint32_t v) { return uint64_t(id) << 32 | v; }
+  static uint32_t end_id(uint64_t key) { return uint32_t(key >> 32); }
 };
 
 // The input's boundary loops, an id per boundary half-edge. The dual keeps a loop as a hole only
@@ -1316,9 +1322,14 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
     }
     heap.push({by_weight ? w : w > 0 ? weight[a] * weight[b] / w * d : 0.0, a, b, stamp[a], stamp[b]});
   };
+  // The pairs with a valid entry not popped yet. A merge changes the cost of the merged cluster's
+  // pairs only; its neighbours' other pairs keep theirs and need an entry again only where theirs
+  // was popped.
+  std::unordered_set<uint64_t> pending;
+  auto pair_key = [](uint32_t a, uint32_t b) { return a < b ? uint64_t(a) << 32 | b : uint64_t(b) << 32 | a; };
   for (uint32_t a = 0; a < clusters; ++a)
     for (uint32_t b : neighbours[a])
-      if (a < b) push(a, b);
+      if (a < b) push(a, b), pending.insert(pair_key(a, b));
   std::vector<uint32_t> common, faces;
   std::vector<uint8_t> side;
   DiagonalLedger ledger;
@@ -1399,6 +1410,7 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
     heap.pop();
     uint32_t a = e.a, b = e.b;
     if (!alive[a] || !alive[b] || e.stamp_a != stamp[a] || e.stamp_b != stamp[b]) continue;  // stale
+    pending.erase(pair_key(a, b));
     uint32_t component = view.component[a];
     if (count[component] <= targets[component]) continue;
     const uint64_t cost = members[a].size() + members[b].size();
@@ -1434,13 +1446,13 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
     alive[b] = 0;
     --count[component];
     ++merges;
-    // Everything around the merged cluster may have become (un)fit: new stamps, pairs pushed again.
+    // Everything around the merged cluster may have become (un)fit: its pairs get new costs, its
+    // neighbours' other pairs are scored again when next popped (pushed again where popped).
     ++stamp[a];
-    for (uint32_t r : neighbours[a]) ++stamp[r];
     for (uint32_t r : neighbours[a]) {
-      push(a, r);
+      push(a, r), pending.insert(pair_key(a, r));
       for (uint32_t s : neighbours[r])
-        if (s != a) push(r, s);
+        if (s != a && pending.insert(pair_key(r, s)).second) push(r, s);
     }
   }
   std::vector<uint32_t> renumber(clusters, kNone);
