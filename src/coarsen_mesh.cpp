@@ -179,14 +179,14 @@ std::string describe_component(const ComponentAllocation& a, uint32_t c) {
 
 // ---- the fix loop
 
-// Components up to this many faces, in all, may be rebuilt from one cluster per face when nothing
-// else makes them valid (a priority queue over their faces and a fitness check per merge): about
-// 1.5 s for polygon_mesh's 32k faces. At 20000 (until the twenty-second session) polygon_mesh kept
-// 16-26 defects at every count and the split cheese (40k faces) 442; this makes both valid. The
-// limit is on the sum, smallest components first (until the twenty-fourth session it was per
-// component): the merge's cost grows faster than its faces, and forty broken tetrahedra
-// subdivided six times (16k faces each) ran for minutes.
-constexpr uint64_t kMaxFacesPerFaceStart = 65536;
+// CoarsenMeshOptions::max_face_start_faces, 65536: components up to this many faces, in all, may
+// be rebuilt from one cluster per face when nothing else makes them valid (a priority queue over
+// their faces and a fitness check per merge): about 1.5 s for polygon_mesh's 32k faces. At 20000
+// (until the twenty-second session) polygon_mesh kept 16-26 defects at every count and the split
+// cheese (40k faces) 442; this makes both valid. The limit is on the sum, smallest components
+// first (until the twenty-fourth session it was per component): the merge's cost grows faster
+// than its faces, and forty broken tetrahedra subdivided six times (16k faces each) ran for
+// minutes.
 
 // Per-face data of the fixes, computed once: weight w = rho * area and centroid, input units.
 struct FaceData {
@@ -1263,8 +1263,8 @@ void replace_component(const Topology& topology, std::vector<uint32_t>& base, co
 // libcgal-demo at faces / 10 and / 40 (also with --gradation 1) one call scored at most 77 faces
 // per face of the components it merged (b9_mesh -> 254), and with this budget every output there
 // is the same. When the budget is spent merge_down stops where it is: those components stay above
-// their targets, as where no merge fits.
-constexpr uint64_t kScoredFacesPerFace = 512;
+// their targets, as where no merge fits. The budget per face is
+// CoarsenMeshOptions::merge_budget_per_face (512).
 struct MergeBudget {
   uint64_t left = UINT64_MAX;
 };
@@ -1684,9 +1684,10 @@ std::vector<uint32_t> merge_down_with_flips(const Mesh& mesh, const Topology& to
                                             RegionCheck& check, CornerPolygons& corners,
                                             const BoundaryLoops& boundary_loops,
                                             const std::vector<uint32_t>& labels, uint32_t clusters,
-                                            const std::vector<uint32_t>& targets, DefectsOf defects_of) {
+                                            const std::vector<uint32_t>& targets, uint64_t budget_per_face,
+                                            DefectsOf defects_of) {
   constexpr uint32_t kMaxFlips = 64;
-  MergeBudget budget;  // kScoredFacesPerFace per face of the components above their targets
+  MergeBudget budget;  // budget_per_face per face of the components above their targets
   {
     const std::vector<uint32_t> held = clusters_per_component(topology, labels, clusters);
     uint64_t faces = 0;
@@ -1694,7 +1695,7 @@ std::vector<uint32_t> merge_down_with_flips(const Mesh& mesh, const Topology& to
       const uint32_t c = topology.face_component[f];
       faces += held[c] > targets[c];
     }
-    budget.left = kScoredFacesPerFace * faces;
+    budget.left = faces > 0 && budget_per_face > UINT64_MAX / faces ? UINT64_MAX : budget_per_face * faces;
   }
   std::vector<uint32_t> result =
       merge_down_twice(topology, data, check, corners, boundary_loops, labels, clusters, targets, budget);
@@ -2095,7 +2096,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
         if (broken[c] > 0 && broken_fine[c] == 0) targets[c] = out.allocation.clusters[c];
       std::vector<uint32_t> merged =
           merge_down_with_flips(mesh, topology, data, check, corners, boundary_loops, fixed.labels, fo.clusters, targets,
-                                defects_of);
+                                options.merge_budget_per_face, defects_of);
       uint32_t merged_count = *std::max_element(merged.begin(), merged.end()) + 1;
       std::vector<uint32_t> held = clusters_per_component(topology, merged, merged_count);
       std::vector<uint32_t> composed = result.labels;
@@ -2141,7 +2142,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
       });
       uint64_t taken = 0;
       for (uint32_t c : candidates) {
-        if (taken + out.allocation.faces[c] > kMaxFacesPerFaceStart) break;
+        if (taken + out.allocation.faces[c] > options.max_face_start_faces) break;
         taken += out.allocation.faces[c];
         face_start[c] = 1;
         targets[c] = out.allocation.clusters[c];
@@ -2153,7 +2154,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
         if (face_start[topology.face_component[f]]) direct[f] = next_id++;
       std::vector<uint32_t> start_counts = clusters_per_component(topology, direct, next_id);
       direct = merge_down_with_flips(mesh, topology, data, check, corners, boundary_loops, direct, next_id, targets,
-                                     defects_of);
+                                     options.merge_budget_per_face, defects_of);
       uint32_t merged_count = *std::max_element(direct.begin(), direct.end()) + 1;
       std::vector<uint32_t> held = clusters_per_component(topology, direct, merged_count);
       std::vector<uint32_t> composed = result.labels;

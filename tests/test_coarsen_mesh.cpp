@@ -327,14 +327,11 @@ TEST_CASE("coarsen_mesh: an open grid with holes keeps its boundary loops") {
   }
 }
 
-TEST_CASE("coarsen_mesh: a strip one triangle wide comes out a strip") {
-  // Every vertex on the boundary (as the fillets of libcgal-demo's ALSTOM_TEST4): a cluster of two
-  // faces or more away from the ends meets the boundary on both sides, in two arcs, so the clusters
-  // between the two ends must be single faces, and each end's cluster borders only the next one.
-  // Before boundary corners counted as neighbours no fix could reach that, and every count left
-  // defects (at 3: three vertices and no triangle).
+namespace {
+
+// A strip of 2k triangles, one wide: every vertex on the boundary.
+Mesh strip_one_triangle_wide(uint32_t k) {
   Mesh strip;
-  const uint32_t k = 17;
   for (uint32_t i = 0; i <= k; ++i) {
     test::add_vertex(strip, i, 0, 0);
     test::add_vertex(strip, i + 0.5, 1, 0);
@@ -343,6 +340,18 @@ TEST_CASE("coarsen_mesh: a strip one triangle wide comes out a strip") {
     test::add_triangle(strip, 2 * i, 2 * i + 2, 2 * i + 1);
     test::add_triangle(strip, 2 * i + 1, 2 * i + 2, 2 * i + 3);
   }
+  return strip;
+}
+
+}  // namespace
+
+TEST_CASE("coarsen_mesh: a strip one triangle wide comes out a strip") {
+  // Every vertex on the boundary (as the fillets of libcgal-demo's ALSTOM_TEST4): a cluster of two
+  // faces or more away from the ends meets the boundary on both sides, in two arcs, so the clusters
+  // between the two ends must be single faces, and each end's cluster borders only the next one.
+  // Before boundary corners counted as neighbours no fix could reach that, and every count left
+  // defects (at 3: three vertices and no triangle).
+  const Mesh strip = strip_one_triangle_wide(17);
   for (uint32_t n : {3u, 5u, 12u}) {
     CAPTURE(n);
     check_valid(strip, run(strip, n), n);
@@ -350,6 +359,43 @@ TEST_CASE("coarsen_mesh: a strip one triangle wide comes out a strip") {
   // Beside a grid, as one of several parts.
   const Mesh both = test::combine(test::grid(10, 10), strip, 20);
   check_valid(both, run(both, 40), 40);
+}
+
+TEST_CASE("coarsen_mesh: the start from one cluster per face is limited by its faces and a work budget") {
+  // The strip above needs that start: its clusters away from the ends must be single faces, which
+  // no fix round or finer clustering reaches.
+  const Mesh strip = strip_one_triangle_wide(17);
+  const Topology t = build_topology(strip);
+  const uint64_t faces = strip.face_count();
+  for (uint32_t n : {3u, 5u, 12u}) {
+    CAPTURE(n);
+    CoarsenMeshOptions o;
+    o.cluster.clusters = n;
+    o.cluster.device = "cpu";
+    const CoarsenMeshResult plain = coarsen_mesh(strip, t, o);
+    CHECK(plain.face_start_components == 1);
+    check_valid(strip, plain, n);
+    // The limit counts the component's faces: at them it is rebuilt, one below it is not.
+    o.max_face_start_faces = faces;
+    const CoarsenMeshResult at_limit = coarsen_mesh(strip, t, o);
+    CHECK(at_limit.face_start_components == 1);
+    CHECK(at_limit.clustering.labels == plain.clustering.labels);
+    o.max_face_start_faces = faces - 1;
+    const CoarsenMeshResult below = coarsen_mesh(strip, t, o);
+    CHECK(below.face_start_components == 0);
+    CHECK(below.defects_remain);
+    // With no budget nothing is merged, and the component stays as it was without the start.
+    o.max_face_start_faces = faces;
+    o.merge_budget_per_face = 0;
+    const CoarsenMeshResult spent = coarsen_mesh(strip, t, o);
+    CHECK(spent.face_start_components == 0);
+    CHECK(spent.merged_back == 0);
+    CHECK(spent.clustering.labels == below.clustering.labels);
+    CHECK(spent.coarse.defects.size() == below.coarse.defects.size());
+    // A few faces checked per face merged are enough for the strip (the default is 512).
+    o.merge_budget_per_face = 16;
+    CHECK(coarsen_mesh(strip, t, o).clustering.labels == plain.clustering.labels);
+  }
 }
 
 namespace {

@@ -349,6 +349,17 @@ struct CoarsenMeshOptions {
   /// Fix rounds at most per attempt (each attempt: rounds until no defect, see coarsen_mesh);
   /// 0 = no fixing at all, the defects are reported as coarsen_clustering does.
   uint32_t max_fix_rounds = 12;
+  /// Step 4 of coarsen_mesh: the faces, in all, of the broken components that may be rebuilt from
+  /// one cluster per face (smallest components first; a component that would pass the limit and
+  /// those after it are not). The merging's cost grows faster than its faces: polygon_mesh's 32k
+  /// faces take about 1.5 s.
+  uint64_t max_face_start_faces = 65536;
+  /// Step 4's work budget: faces checked (each candidate merge's two clusters) per face of the
+  /// components merged down, per merging. Where it is spent the merging stops, and the components
+  /// it was merging stay as they were. At 512 no libcgal-demo output changes (one merging there
+  /// checked at most 77 per face); without it, a subdivided tetrahedron of 16k faces rebuilt
+  /// toward its 4 clusters took 78 s.
+  uint64_t merge_budget_per_face = 512;
 };
 
 struct CoarsenMeshResult {
@@ -417,10 +428,10 @@ struct CoarsenMeshResult {
 ///     triangulation without an edge used twice) and replaces them; where greedy merging stops
 ///     above n (near the fewest vertices the surface allows), a dual edge flip (a strip of faces
 ///     along a border handed to the cluster at its end) opens a merge again; then components
-///     still broken, smallest first up to 65536 faces in all, are rebuilt from one cluster per face
-///     merged down the same way. The merging has a work budget (512 faces checked per face merged):
-///     where it is spent, the components stay as they were. Fix rounds that come back to labels
-///     they had before stop (a cycle);
+///     still broken, smallest first up to max_face_start_faces in all, are rebuilt from one cluster
+///     per face merged down the same way. The merging has a work budget (merge_budget_per_face
+///     faces checked per face merged): where it is spent, the components stay as they were. Fix
+///     rounds that come back to labels they had before stop (a cycle);
 ///  5. coarsen_clustering of the clustering with the fewest defects.
 /// Degenerate triangles (geometry, not topology) are not fixed.
 ///
