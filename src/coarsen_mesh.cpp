@@ -62,7 +62,6 @@
 #include <span>
 #include <string>
 #include <unordered_map>
-#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -622,6 +621,31 @@ class CornerPolygons {
     for (uint32_t v : vertices_of(faces))
       if (at(v, label) && !triangulable(runs_.data(), runs_.size(), adjacent, open_, adjacent)) return false;
     return true;
+  }
+
+  // The distinct vertices of `faces` on an edge whose other face is not inside(g), or on the mesh
+  // boundary (scratch: valid until the next call). On a manifold these are the only vertices of
+  // `faces` with faces of other clusters in their fan: a fan holding both has two of them next to
+  // each other across an edge at the vertex. So where `faces` is a cluster, they are the only
+  // vertices of its faces where a polygon can be, whether the faces outside are labelled as before
+  // or after it changed (merge_down: the polygons around a merged pair, about half the vertices).
+  template <class Inside>
+  const std::vector<uint32_t>& border_vertices_of(const std::vector<uint32_t>& faces, Inside inside) {
+    if (++stamp_ == 0) {  // wrapped: clear once
+      std::fill(vertex_stamp_.begin(), vertex_stamp_.end(), 0);
+      stamp_ = 1;
+    }
+    vertices_.clear();
+    for (uint32_t f : faces)
+      for (int e = 0; e < 3; ++e) {
+        const uint32_t g = topology_.face_adjacent[3 * size_t(f) + e];
+        if (g != kNone && inside(g)) continue;
+        for (int k : {e, (e + 1) % 3}) {
+          const uint32_t v = mesh_.indices[3 * size_t(f) + k];
+          if (vertex_stamp_[v] != stamp_) vertex_stamp_[v] = stamp_, vertices_.push_back(v);
+        }
+      }
+    return vertices_;
   }
 
   // The distinct vertices of `faces` (scratch: valid until the next call).
@@ -1322,22 +1346,35 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
     }
     heap.push({by_weight ? w : w > 0 ? weight[a] * weight[b] / w * d : 0.0, a, b, stamp[a], stamp[b]});
   };
-  // The pairs with a valid entry not popped yet. A merge changes the cost of the merged cluster's
+  // The pairs with a valid entry not popped yet, each listed with the lower id of the two (a few
+  // per cluster: its current neighbours at most). A merge changes the cost of the merged cluster's
   // pairs only; its neighbours' other pairs keep theirs and need an entry again only where theirs
   // was popped.
-  std::unordered_set<uint64_t> pending;
-  auto pair_key = [](uint32_t a, uint32_t b) { return a < b ? uint64_t(a) << 32 | b : uint64_t(b) << 32 | a; };
+  std::vector<std::vector<uint32_t>> pending(clusters);
+  auto mark_pending = [&](uint32_t x, uint32_t y) {  // false: it was already
+    if (x > y) std::swap(x, y);
+    std::vector<uint32_t>& p = pending[x];
+    if (std::find(p.begin(), p.end(), y) != p.end()) return false;
+    p.push_back(y);
+    return true;
+  };
+  auto unmark_pending = [&](uint32_t x, uint32_t y) {
+    if (x > y) std::swap(x, y);
+    std::vector<uint32_t>& p = pending[x];
+    auto it = std::find(p.begin(), p.end(), y);
+    if (it != p.end()) *it = p.back(), p.pop_back();
+  };
   for (uint32_t a = 0; a < clusters; ++a)
     for (uint32_t b : neighbours[a])
-      if (a < b) push(a, b), pending.insert(pair_key(a, b));
+      if (a < b) push(a, b), mark_pending(a, b);
   std::vector<uint32_t> common, faces;
   std::vector<uint8_t> side;
   DiagonalLedger ledger;
   auto current = [&](uint32_t f) { return labels[f]; };
   for (uint32_t v = 0; v + 1 < topology.vertex_face_offsets.size(); ++v)
     if (corners.at(v, current)) ledger.add(corners.polygon().data(), corners.polygon().size(), +1, corners.open());
-  std::vector<uint32_t> old_polygons, new_polygons, old_offsets, new_offsets;
-  std::vector<uint8_t> old_open, new_open;
+  std::vector<uint32_t> old_polygons, new_polygons, kept_polygons, old_offsets, new_offsets, kept_offsets;
+  std::vector<uint8_t> old_open, new_open, kept_open;
   auto fit = [&](uint32_t a, uint32_t b) {
     shared_loops.clear();
     std::set_intersection(loops[a].begin(), loops[a].end(), loops[b].begin(), loops[b].end(),
@@ -1358,19 +1395,27 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
     // polygon's possible diagonals.
     auto before = [&](uint32_t f) { return labels[f]; };
     auto after = [&](uint32_t f) { return labels[f] == b ? a : labels[f]; };
-    old_polygons.clear(), new_polygons.clear(), old_open.clear(), new_open.clear();
-    old_offsets.assign(1, 0), new_offsets.assign(1, 0);
-    for (uint32_t v : corners.vertices_of(faces)) {
+    old_polygons.clear(), new_polygons.clear(), kept_polygons.clear(), old_open.clear(), new_open.clear();
+    kept_open.clear();
+    old_offsets.assign(1, 0), new_offsets.assign(1, 0), kept_offsets.assign(1, 0);
+    auto append = [&](std::vector<uint32_t>& polygons, std::vector<uint32_t>& offsets, std::vector<uint8_t>& open) {
+      polygons.insert(polygons.end(), corners.polygon().begin(), corners.polygon().end());
+      offsets.push_back(uint32_t(polygons.size()));
+      open.push_back(corners.open());
+    };
+    // Only the merged pair's border vertices can hold a polygon (the ledger's sums and the checks
+    // do not depend on their order). A polygon without b is the same after the merge: checked
+    // again (its neighbours' borders change), but its diagonals stay in the ledger as they are.
+    for (uint32_t v : corners.border_vertices_of(faces, [&](uint32_t g) { return labels[g] == a || labels[g] == b; })) {
       if (corners.at(v, before)) {
-        old_polygons.insert(old_polygons.end(), corners.polygon().begin(), corners.polygon().end());
-        old_offsets.push_back(uint32_t(old_polygons.size()));
-        old_open.push_back(corners.open());
+        const std::vector<uint32_t>& polygon = corners.polygon();
+        if (std::find(polygon.begin(), polygon.end(), b) == polygon.end()) {
+          append(kept_polygons, kept_offsets, kept_open);
+          continue;
+        }
+        append(old_polygons, old_offsets, old_open);
       }
-      if (corners.at(v, after)) {
-        new_polygons.insert(new_polygons.end(), corners.polygon().begin(), corners.polygon().end());
-        new_offsets.push_back(uint32_t(new_polygons.size()));
-        new_open.push_back(corners.open());
-      }
+      if (corners.at(v, after)) append(new_polygons, new_offsets, new_open);
     }
     auto swap_in = [&](const std::vector<uint32_t>& out, const std::vector<uint32_t>& out_offsets,
                        const std::vector<uint8_t>& out_open, const std::vector<uint32_t>& in,
@@ -1396,12 +1441,18 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
     auto joined = [&](uint32_t x, uint32_t y) {  // a closing side: the boundary step (x, y) is its own
       return ledger.steps(x, y) > 1 || adjacent(x, y);
     };
-    for (size_t i = 0; i + 1 < new_offsets.size(); ++i)
-      if (!corners.triangulable(&new_polygons[new_offsets[i]], new_offsets[i + 1] - new_offsets[i], taken, new_open[i],
-                                joined)) {
-        swap_in(new_polygons, new_offsets, new_open, old_polygons, old_offsets, old_open);
-        return false;
-      }
+    auto all_triangulable = [&](const std::vector<uint32_t>& polygons, const std::vector<uint32_t>& offsets,
+                                const std::vector<uint8_t>& open) {
+      for (size_t i = 0; i + 1 < offsets.size(); ++i)
+        if (!corners.triangulable(&polygons[offsets[i]], offsets[i + 1] - offsets[i], taken, open[i], joined))
+          return false;
+      return true;
+    };
+    if (!all_triangulable(new_polygons, new_offsets, new_open) ||
+        !all_triangulable(kept_polygons, kept_offsets, kept_open)) {
+      swap_in(new_polygons, new_offsets, new_open, old_polygons, old_offsets, old_open);
+      return false;
+    }
     return true;  // the merge follows: the ledger already holds its polygons
   };
   uint32_t merges = 0;
@@ -1410,7 +1461,7 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
     heap.pop();
     uint32_t a = e.a, b = e.b;
     if (!alive[a] || !alive[b] || e.stamp_a != stamp[a] || e.stamp_b != stamp[b]) continue;  // stale
-    pending.erase(pair_key(a, b));
+    unmark_pending(a, b);
     uint32_t component = view.component[a];
     if (count[component] <= targets[component]) continue;
     const uint64_t cost = members[a].size() + members[b].size();
@@ -1437,12 +1488,14 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
     neighbours[a] = joined;
     for (uint32_t r : neighbours[b]) {
       if (r == a) continue;
+      unmark_pending(r, b);  // (its entries are stale now)
       std::vector<uint32_t>& nr = neighbours[r];
       nr.erase(std::find(nr.begin(), nr.end(), b));
       auto at = std::lower_bound(nr.begin(), nr.end(), a);
       if (at == nr.end() || *at != a) nr.insert(at, a);
     }
     neighbours[b].clear();
+    pending[b].clear();
     alive[b] = 0;
     --count[component];
     ++merges;
@@ -1450,9 +1503,9 @@ uint32_t merge_down(const Topology& topology, const FaceData& data, RegionCheck&
     // neighbours' other pairs are scored again when next popped (pushed again where popped).
     ++stamp[a];
     for (uint32_t r : neighbours[a]) {
-      push(a, r), pending.insert(pair_key(a, r));
+      push(a, r), mark_pending(a, r);
       for (uint32_t s : neighbours[r])
-        if (s != a && pending.insert(pair_key(r, s)).second) push(r, s);
+        if (s != a && mark_pending(r, s)) push(r, s);
     }
   }
   std::vector<uint32_t> renumber(clusters, kNone);
