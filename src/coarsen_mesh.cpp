@@ -678,39 +678,37 @@ class CornerPolygons {
   // or after it changed (merge_down: the polygons around a merged pair, about half the vertices).
   template <class Inside>
   const std::vector<uint32_t>& border_vertices_of(const std::vector<uint32_t>& faces, Inside inside) {
-    if (++stamp_ == 0) {  // wrapped: clear once
-      std::fill(vertex_stamp_.begin(), vertex_stamp_.end(), 0);
-      stamp_ = 1;
-    }
-    vertices_.clear();
+    start_vertex_set();
     for (uint32_t f : faces)
       for (int e = 0; e < 3; ++e) {
         const uint32_t g = topology_.face_adjacent[3 * size_t(f) + e];
         if (g != kNone && inside(g)) continue;
-        for (int k : {e, (e + 1) % 3}) {
-          const uint32_t v = mesh_.indices[3 * size_t(f) + k];
-          if (vertex_stamp_[v] != stamp_) vertex_stamp_[v] = stamp_, vertices_.push_back(v);
-        }
+        for (int k : {e, (e + 1) % 3}) add_to_vertex_set(mesh_.indices[3 * size_t(f) + k]);
       }
     return vertices_;
   }
 
   // The distinct vertices of `faces` (scratch: valid until the next call).
   const std::vector<uint32_t>& vertices_of(const std::vector<uint32_t>& faces) {
+    start_vertex_set();
+    for (uint32_t f : faces)
+      for (int k = 0; k < 3; ++k) add_to_vertex_set(mesh_.indices[3 * size_t(f) + k]);
+    return vertices_;
+  }
+
+ private:
+  // vertices_ emptied; a vertex is in it when vertex_stamp_ holds stamp_.
+  void start_vertex_set() {
     if (++stamp_ == 0) {  // wrapped: clear once
       std::fill(vertex_stamp_.begin(), vertex_stamp_.end(), 0);
       stamp_ = 1;
     }
     vertices_.clear();
-    for (uint32_t f : faces)
-      for (int k = 0; k < 3; ++k) {
-        uint32_t v = mesh_.indices[3 * size_t(f) + k];
-        if (vertex_stamp_[v] != stamp_) vertex_stamp_[v] = stamp_, vertices_.push_back(v);
-      }
-    return vertices_;
+  }
+  void add_to_vertex_set(uint32_t v) {
+    if (vertex_stamp_[v] != stamp_) vertex_stamp_[v] = stamp_, vertices_.push_back(v);
   }
 
- private:
   const Mesh& mesh_;
   const Topology& topology_;
   std::vector<uint32_t> vertex_stamp_, vertices_, fan_, runs_, sorted_;
