@@ -554,6 +554,21 @@ TEST_CASE("coarsen_mesh: an irregular sphere with missing triangles keeps its ho
   }
 }
 
+TEST_CASE("coarsen_mesh: a component rebuilt from single faces is rebuilt around its defects only") {
+  // At 400 the irregular sphere above stays broken through the fix rounds and the finer
+  // clusterings, and is rebuilt from single faces. The finer clustering with the fewest defects
+  // is kept but around them (its clusters in a defect and their neighbours become single faces):
+  // far fewer merges than from every face, and the same guarantees.
+  const Mesh m = irregular_holed_sphere(55, 40);
+  const uint32_t n = 400;
+  CoarsenMeshResult r = run(m, n);
+  check_valid(m, r, n);
+  CHECK(r.face_start_components == 1);
+  CHECK(r.face_start_from_finer == 1);
+  CHECK(r.refined_clusters == 0);  // no finer clustering was merged back whole
+  CHECK(r.merged_back < (m.face_count() - n) / 4);
+}
+
 TEST_CASE("coarsen_mesh: faces with a repeated corner are left out and take a neighbour's cluster") {
   // Welding slivers leaves faces like (a, a, b): no area, no edges, each a component of its own.
   // Each took a cluster, whose coarse vertex no triangle used (assimp-testmodels' spider.obj ->

@@ -90,8 +90,13 @@ std::string describe_fixes(const CoarsenMeshResult& job) {
   if (job.refined_clusters)
     s += "; clustered at " + std::to_string(job.refined_clusters) + " and merged back (" +
          std::to_string(job.merged_back) + " merges)";
-  if (job.face_start_components)
+  if (job.face_start_components) {
     s += "; " + std::to_string(job.face_start_components) + " components rebuilt from single faces";
+    if (job.face_start_from_finer == job.face_start_components)
+      s += " around the defects of a finer clustering";
+    else if (job.face_start_from_finer)
+      s += " (" + std::to_string(job.face_start_from_finer) + " around the defects of a finer clustering)";
+  }
   return s;
 }
 
@@ -302,6 +307,7 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("remaining_defects", uint64_t(r.defects.size())).value("defects_remain", job.defects_remain)
         .value("refined_clusters", job.refined_clusters).value("merged_back", job.merged_back)
         .value("face_start_components", job.face_start_components)
+        .value("face_start_from_finer", job.face_start_from_finer)
         .value("abandoned_fixes", uint64_t(job.abandoned_fixes)).value("iterations", job.fix_iterations);
     j.end_object();
     j.begin_array("fixes");

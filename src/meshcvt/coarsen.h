@@ -378,10 +378,12 @@ struct CoarsenMeshResult {
   /// clustering was made and then merged back to n (merged_back merges); 0 when not used.
   uint32_t refined_clusters = 0;
   uint32_t merged_back = 0;
-  /// Components (at most 65536 faces in all, smallest first) still broken after that, rebuilt
-  /// from one cluster per face merged down to their count (their merges are counted in
-  /// merged_back).
+  /// Components (at most max_face_start_faces in all, smallest first) still broken after that,
+  /// rebuilt from single faces merged down to their count (their merges are counted in
+  /// merged_back); face_start_from_finer of them from the finer clustering that left them the
+  /// fewest defects, with only its clusters in a defect and their neighbours cut into single faces.
   uint32_t face_start_components = 0;
+  uint32_t face_start_from_finer = 0;
   size_t abandoned_fixes = 0;        ///< fixes made on attempts that were not kept (not in `fixes`)
   /// Defects are left (coarse.defects): no attempt removed them all; `clustering` is then the one
   /// with the fewest defects.
@@ -428,8 +430,10 @@ struct CoarsenMeshResult {
 ///     triangulation without an edge used twice) and replaces them; where greedy merging stops
 ///     above n (near the fewest vertices the surface allows), a dual edge flip (a strip of faces
 ///     along a border handed to the cluster at its end) opens a merge again; then components
-///     still broken, smallest first up to max_face_start_faces in all, are rebuilt from one cluster
-///     per face merged down the same way. The merging has a work budget (merge_budget_per_face
+///     still broken, smallest first up to max_face_start_faces in all, are rebuilt from single
+///     faces merged down the same way: first only around their defects in the finer clustering
+///     that left them the fewest (its clusters in a defect and their neighbours cut into single
+///     faces, the others kept), and where that does not remove defects, every face. The merging has a work budget (merge_budget_per_face
 ///     faces checked per face merged): where it is spent, the components stay as they were. Fix
 ///     rounds that come back to labels they had before stop (a cycle);
 ///  5. coarsen_clustering of the clustering with the fewest defects.
