@@ -2280,35 +2280,43 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
       direct = result.labels;
       next_id = n;
       if (from_fine) {
+        // The faces of each component (CSR), so that each is walked alone.
+        std::vector<uint32_t> component_offsets(topology.component_count + 1, 0), component_faces(direct.size());
+        for (uint32_t c : topology.face_component) ++component_offsets[c + 1];
+        for (uint32_t c = 0; c < topology.component_count; ++c) component_offsets[c + 1] += component_offsets[c];
+        {
+          std::vector<uint32_t> fill(component_offsets.begin(), component_offsets.end() - 1);
+          for (size_t f = 0; f < direct.size(); ++f) component_faces[fill[topology.face_component[f]]++] = uint32_t(f);
+        }
         std::vector<uint32_t> fresh;  // per fine cluster id: its id in direct, or kNone
-        std::vector<uint8_t> single;  // per fine cluster id: made single faces
+        std::vector<uint8_t> core, single;  // per fine cluster id: in a defect; made single faces
         for (uint32_t c = 0; c < topology.component_count; ++c) {
           if (!face_start[c]) continue;
+          const std::span<const uint32_t> own(component_faces.data() + component_offsets[c],
+                                              component_offsets[c + 1] - component_offsets[c]);
           if (best_fine[c] == kNone) {  // no finer clustering of it kept: single faces
-            for (size_t f = 0; f < direct.size(); ++f)
-              if (topology.face_component[f] == c) direct[f] = next_id++;
+            for (uint32_t f : own) direct[f] = next_id++;
             continue;
           }
           const FineStart& start = fine_starts[best_fine[c]];
           fresh.assign(start.clusters, kNone);
-          single.assign(start.clusters, 0);
+          core.assign(start.clusters, 0);
           for (const DualDefect& d : start.defects)
             for (uint32_t k : {d.cluster, d.other, d.third})
-              if (k < start.clusters) single[k] = 1;
-          std::vector<uint8_t> core = single;
-          for (size_t f = 0; f < direct.size(); ++f) {
-            if (topology.face_component[f] != c || !core[start.labels[f]]) continue;
+              if (k < start.clusters) core[k] = 1;
+          single = core;
+          for (uint32_t f : own) {
+            if (!core[start.labels[f]]) continue;
             for (int e = 0; e < 3; ++e) {
-              const uint32_t g = topology.face_adjacent[3 * f + e];
+              const uint32_t g = topology.face_adjacent[3 * size_t(f) + e];
               if (g != kNone) single[start.labels[g]] = 1;
             }
           }
-          for (size_t f = 0; f < direct.size(); ++f) {
-            if (topology.face_component[f] != c) continue;
+          for (uint32_t f : own) {
             const uint32_t l = start.labels[f];
-            if (single[l])
+            if (single[l]) {
               direct[f] = next_id++;
-            else {
+            } else {
               if (fresh[l] == kNone) fresh[l] = next_id++;
               direct[f] = fresh[l];
             }
