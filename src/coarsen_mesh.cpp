@@ -408,36 +408,30 @@ class RegionCheck {
       }
     }
     if (2 * vertices - int64_t(count) - border != 2) s += 100;  // 2 chi = 2V - 2E + 2F, 2E = 3F + B
+    if (!two_per_vertex || single != 0) {  // counted again from the sorted ends
+      neighbour_ends_.clear();
+      std::sort(ends_.begin(), ends_.end());
+      for (size_t i = 0; i < ends_.size();) {
+        size_t j = i;
+        uint32_t chain_ends = 0;
+        while (j < ends_.size() && end_id(ends_[j]) == end_id(ends_[i])) {
+          size_t k = j;
+          while (k < ends_.size() && ends_[k] == ends_[j]) ++k;
+          chain_ends += k - j == 1;
+          j = k;
+        }
+        neighbour_ends_.push_back({end_id(ends_[i]), chain_ends});
+        i = j;
+      }
+    }
     uint32_t neighbours = 0;
     bool open = false;
-    if (two_per_vertex && single == 0) {
-      for (const auto& [id, ends] : neighbour_ends_) {
-        if (id == kBoundary)
-          open = true;
-        else
-          ++neighbours;
-        if (ends > 2) s += 100;
-      }
-      if (open && neighbours < 2) neighbours += boundary_corner_neighbours(p, labels);
-      if (neighbours < (open ? 2u : 3u)) s += 10;
-      return s;
-    }
-    std::sort(ends_.begin(), ends_.end());
-    for (size_t i = 0; i < ends_.size();) {
-      size_t j = i;
-      uint32_t chain_ends = 0;
-      while (j < ends_.size() && end_id(ends_[j]) == end_id(ends_[i])) {
-        size_t k = j;
-        while (k < ends_.size() && ends_[k] == ends_[j]) ++k;
-        chain_ends += k - j == 1;
-        j = k;
-      }
-      if (end_id(ends_[i]) == kBoundary)
+    for (const auto& [id, ends] : neighbour_ends_) {
+      if (id == kBoundary)
         open = true;
       else
         ++neighbours;
-      if (chain_ends > 2) s += 100;
-      i = j;
+      if (ends > 2) s += 100;
     }
     if (open && neighbours < 2) neighbours += boundary_corner_neighbours(p, labels);
     if (neighbours < (open ? 2u : 3u)) s += 10;
@@ -2253,8 +2247,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
     // at faces / 10 and / 40, 6 and 8 defects fewer, 23 and 156 angles below 30 fewer (boeing ->
     // 64 loses: Q avg 0.62 -> 0.58). Where that leaves as many defects, every face.
     std::vector<uint32_t> broken = broken_manifolds(result.labels, n, result.defects);
-    std::vector<uint32_t> direct = result.labels;
-    uint32_t next_id = n, selected = 0;
+    uint32_t selected = 0;
     std::vector<uint32_t> targets = clusters_per_component(topology, result.labels, n);
     std::vector<uint8_t> face_start(topology.component_count, 0);  // rebuilt from single faces
     {
@@ -2277,8 +2270,8 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
     // neighbours become single faces, the others stay as they are; then, where that does not
     // take, every face.
     for (int from_fine = fine_starts.empty() ? 0 : 1; selected > 0 && from_fine >= 0; --from_fine) {
-      direct = result.labels;
-      next_id = n;
+      std::vector<uint32_t> direct = result.labels;
+      uint32_t next_id = n;
       if (from_fine) {
         // The faces of each component (CSR), so that each is walked alone.
         std::vector<uint32_t> component_offsets(topology.component_count + 1, 0), component_faces(direct.size());
