@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Benchmark of the GPU clustering engine next to the CPU engine: `meshcvt cluster -n 10000` on
 # bunny00 (75k faces, CGAL's demo mesh) and on bunny00 subdivided 2 and 3 times (1.2M, 4.8M faces),
-# --device cpu and --device gpu, printing iterations, iterate time, time per iteration and total
-# time from the JSON report, and whether the labels are identical.
+# --device cpu and --device gpu, printing iterations, iterate time, time per iteration, the
+# initialization (and its Lloyd steps), the setup not hidden by it, the clustering's total and the
+# topology built before it, from the JSON report, and whether the labels are identical.
 # Builds meshcvt (release) in build-gpu-bench/; fetches bunny00 with `apt-get download libcgal-demo`
 # into bench/data/ (git-ignored, never committed).
 # usage: bench/gpu_bench.sh [--quick]   (--quick: skip the 4.8M-face mesh)
@@ -50,7 +51,7 @@ fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 echo "machine: $(nproc) cores, $(uname -sr); $clusters clusters, metric cvt, topology preserving"
-printf '%-16s %-7s %10s %6s %11s %12s %9s %9s\n' mesh device faces iter iterate_s ms_per_iter init_s total_s
+printf '%-16s %-7s %10s %6s %11s %12s %9s %8s %8s %9s %10s\n' mesh device faces iter iterate_s ms_per_iter init_s lloyd_s setup_s total_s topology_s
 for mesh in "${meshes[@]}"; do
   name=$(basename "$mesh")
   for device in cpu "$gpu"; do
@@ -62,7 +63,8 @@ r = json.load(open(sys.argv[1]))
 t = r["timings_s"]
 it = max(r["iterations"], 1)
 print(f'{sys.argv[2]:<16} {sys.argv[3]:<7} {r["faces"]:>10} {r["iterations"]:>6} {t["iterate"]:>11.3f} '
-      f'{1000 * t["iterate"] / it:>12.2f} {t["init"]:>9.3f} {t["cluster_total"]:>9.3f}   [{r["device"]}]')
+      f'{1000 * t["iterate"] / it:>12.2f} {t["init"]:>9.3f} {t["init_lloyd"]:>8.3f} {t["setup"]:>8.3f} '
+      f'{t["cluster_total"]:>9.3f} {t["topology"]:>10.3f}   [{r["device"]}]')
 PY
   done
   if cmp -s "$work/labels-cpu.txt" "$work/labels-$gpu.txt"; then echo "  labels identical"; else echo "  LABELS DIFFER"; fi

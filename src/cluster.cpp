@@ -227,8 +227,10 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
     // Lloyd steps keep every cluster inside its component (they only trade faces between adjacent
     // clusters), so per-component counts hold.
     ClusterGraph graph;
+    const auto t_lloyd = Clock::now();
     lloyd_flood_steps(problem, topology, pool, labels, options.lloyd_steps,
                       lloyd_min_gain(problem.face_count, problem.clusters), &graph);
+    out.timings.init_lloyd = seconds_since(t_lloyd);
     // The hierarchy can leave a cluster enclosed by a single other one (for l21: an island of
     // other normals inside a region), and the Lloyd steps keep it. No topology-preserving move
     // removes it, so it used to stay until the repair after convergence, which dissolved it,

@@ -53,6 +53,9 @@ assert r['iterations'] == len(r['history']) - 1
 energies = [h['energy'] for h in r['history'] if h['round'] == 0]
 assert all(b <= a * (1 + 1e-9) for a, b in zip(energies, energies[1:])), "energy rose"
 assert r['device'].startswith('cpu')
+t = r['timings_s']
+assert 0 < t['init_lloyd'] <= t['init'] <= t['cluster_total'], t  # the elephant takes Lloyd steps
+assert t['topology'] > 0, t
 head = open(ply, 'rb').read(400).decode('latin1')
 assert 'property int cluster' in head and 'property uchar red' in head, head
 PY
