@@ -1,8 +1,8 @@
 // Benchmark harness for build_topology and subdivide_midpoint (see bench/topology_bench.sh): reads
 // a mesh, optionally subdivides it K times, then builds its topology REPS times and prints the best
-// wall time and the best process CPU time (both threads together). On a shared machine the CPU
+// wall time and the best process CPU time (all threads together). On a shared machine the CPU
 // time says what the work costs; the wall time also includes waiting for a core.
-// usage: topology_bench MESH [K] [REPS]
+// usage: topology_bench MESH [K] [REPS] [THREADS]   (THREADS: build_topology's; 0, the default: one per core)
 #include <time.h>
 
 #include <algorithm>
@@ -30,11 +30,12 @@ double cpu_s() {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: topology_bench MESH [K] [REPS]\n");
+    std::fprintf(stderr, "usage: topology_bench MESH [K] [REPS] [THREADS]\n");
     return 2;
   }
   unsigned levels = argc > 2 ? unsigned(std::atoi(argv[2])) : 0;
   int reps = argc > 3 ? std::max(1, std::atoi(argv[3])) : 5;
+  unsigned threads = argc > 4 ? unsigned(std::atoi(argv[4])) : 0;
   try {
     meshcvt::Mesh mesh = meshcvt::read_mesh(argv[1]);
     double best_wall = 1e30, best_cpu = 1e30;
@@ -55,7 +56,7 @@ int main(int argc, char** argv) {
     for (int r = 0; r < reps; ++r) {
       topology = {};
       double w = wall_s(), c = cpu_s();
-      topology = meshcvt::build_topology(mesh);
+      topology = meshcvt::build_topology(mesh, threads);
       best_wall = std::min(best_wall, wall_s() - w);
       best_cpu = std::min(best_cpu, cpu_s() - c);
     }

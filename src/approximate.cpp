@@ -2120,7 +2120,7 @@ ShapeApproximation approximate_shape(const Mesh& mesh, const Topology& topology,
     Mesh kept = mesh;
     std::vector<uint32_t> kept_index;
     remove_collapsed_faces(kept, &kept_index);
-    ShapeApproximation out = approximate_shape(kept, build_topology(kept), options);
+    ShapeApproximation out = approximate_shape(kept, build_topology(kept, options.threads), options);
     out.labels = labels_with_collapsed_faces(mesh, topology, kept_index, out.labels, 0);
     if (!out.clustering.labels.empty())
       out.clustering.labels = labels_with_collapsed_faces(mesh, topology, kept_index, out.clustering.labels, 0);
@@ -2157,7 +2157,7 @@ ShapeApproximation approximate_shape(const Mesh& mesh, const Topology& topology,
 
 ShapeApproximation approximate_shape(const Mesh& mesh, const ApproximateOptions& options) {
   validate(mesh, options);
-  return approximate_shape(mesh, build_topology(mesh), options);
+  return approximate_shape(mesh, build_topology(mesh, options.threads), options);
 }
 
 ChordRule parse_chord_rule(const std::string& s) {

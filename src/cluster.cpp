@@ -129,7 +129,7 @@ bool run_iterations(IterationEngine& it, uint32_t max_iterations,
 }
 
 Clustering cluster(const Mesh& mesh, const ClusterOptions& options) {
-  return cluster(mesh, build_topology(mesh), options);
+  return cluster(mesh, build_topology(mesh, options.threads), options);
 }
 
 namespace {
@@ -154,7 +154,7 @@ Clustering cluster_without_collapsed_faces(const Mesh& mesh, const Topology& top
   };
   keep(options.density, kept_options.density, "the density");
   keep(options.initial_labels, kept_options.initial_labels, "initial_labels");
-  Clustering out = cluster(kept, build_topology(kept), kept_options);
+  Clustering out = cluster(kept, build_topology(kept, options.threads), kept_options);
   out.labels = labels_with_collapsed_faces(mesh, topology, kept_index, out.labels, 0);
   return out;
 }

@@ -2084,7 +2084,7 @@ CoarsenMeshResult coarsen_without_collapsed_faces(const Mesh& mesh, const Topolo
     for (size_t f = 0; f < faces; ++f)
       if (kept_index[f] != kNone) density.push_back(options.cluster.density[f]);
   }
-  CoarsenMeshResult out = coarsen_mesh(kept, build_topology(kept), kept_options);
+  CoarsenMeshResult out = coarsen_mesh(kept, build_topology(kept, options.cluster.threads), kept_options);
   std::vector<uint32_t> labels = labels_with_collapsed_faces(mesh, topology, kept_index, out.clustering.labels, 0);
   out.clustering.labels = std::move(labels);
   out.collapsed_faces = topology.collapsed_faces;

@@ -236,7 +236,7 @@ JobRun run_job(Mesh m, const std::vector<float>& d, const std::vector<uint32_t>&
   run.density = to_reordered(d, run.order);
   run.origin = run.order.identity() ? origin : inherited(origin, run.order.face_of);
   run.order_seconds = seconds_since(start);
-  run.topology = build_topology(m);
+  run.topology = build_topology(m, options.job.cluster.threads);
   if (prepare) {
     run.prepared = prepare_surface(m, run.topology);
     run.prepared_faces = m.face_count();

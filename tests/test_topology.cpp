@@ -479,6 +479,59 @@ TEST_CASE("topology: large shuffled torus matches brute-force invariants on both
   CHECK(listed == 3ull * nf);
 }
 
+TEST_CASE("topology: every thread count gives the same topology") {
+  // One mesh with everything build_topology tells apart: a torus (closed, genus 1), a grid with a
+  // non-manifold wall (boundary loops, non-manifold edges), a Moebius strip (non-orientable),
+  // collapsed and duplicated faces, a flipped face, an unreferenced vertex; faces shuffled so that
+  // face order and vertex order disagree. Thread counts above the face count leave threads
+  // without faces or vertices.
+  using meshcvt::test::combine;
+  Mesh m = combine(combine(meshcvt::test::torus(24, 12), meshcvt::test::grid_with_wall(12), 3.0), moebius_strip(), 6.0);
+  m = meshcvt::test::with_collapsed_faces(m, 9, 7);
+  for (int c = 0; c < 3; ++c) m.indices.push_back(m.indices[3 * 40 + c]);  // a duplicate of face 40
+  std::swap(m.indices[3 * 100 + 1], m.indices[3 * 100 + 2]);               // a flipped face
+  for (int c = 0; c < 3; ++c) m.positions.push_back(9.0f);                 // an unreferenced vertex
+  const uint32_t nf = uint32_t(m.face_count());
+  uint64_t state = 99;
+  for (uint32_t f = nf - 1; f > 0; --f) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    const uint32_t g = uint32_t((state >> 33) % (f + 1));
+    for (int c = 0; c < 3; ++c) std::swap(m.indices[3 * f + c], m.indices[3 * g + c]);
+  }
+  const Topology one = meshcvt::build_topology(m, 1);
+  REQUIRE(one.nonmanifold_edges > 0);
+  REQUIRE(one.boundary_loops > 0);
+  REQUIRE(one.nonorientable_components == 1);
+  REQUIRE(one.collapsed_faces == 9);
+  REQUIRE(one.duplicate_faces > 0);
+  REQUIRE(one.referenced_vertices + 1 == m.vertex_count());
+  for (unsigned threads : {2u, 3u, 4u, 5u, 7u, 8u, 16u, 1000u}) {
+    CAPTURE(threads);
+    const Topology t = meshcvt::build_topology(m, threads);
+    CHECK(t.face_adjacent == one.face_adjacent);
+    CHECK(t.vertex_face_offsets == one.vertex_face_offsets);
+    CHECK(t.vertex_faces == one.vertex_faces);
+    CHECK(t.face_component == one.face_component);
+    CHECK(t.component_count == one.component_count);
+    CHECK(t.edge_count == one.edge_count);
+    CHECK(t.boundary_edges == one.boundary_edges);
+    CHECK(t.boundary_loops == one.boundary_loops);
+    CHECK(t.nonmanifold_edges == one.nonmanifold_edges);
+    CHECK(t.nonmanifold_vertices == one.nonmanifold_vertices);
+    CHECK(t.degenerate_faces == one.degenerate_faces);
+    CHECK(t.duplicate_faces == one.duplicate_faces);
+    CHECK(t.referenced_vertices == one.referenced_vertices);
+    CHECK(t.collapsed_faces == one.collapsed_faces);
+    CHECK(t.orientation_flips == one.orientation_flips);
+    CHECK(t.nonorientable_components == one.nonorientable_components);
+  }
+  // More threads than faces.
+  const Topology small = meshcvt::build_topology(tetrahedron(), 16);
+  CHECK(small.edge_count == 6);
+  CHECK(small.vertex_faces.size() == 12);
+  CHECK(small.boundary_edges == 0);
+}
+
 // ---- orient_consistently
 
 namespace {

@@ -136,7 +136,7 @@ void run_approximate(ApproximateArgs& a) {
   InputMesh input = read_input(a.input, !a.no_weld, a.quiet);
   const Mesh& mesh = input.mesh;
   const LocalityOrder& order = input.order;
-  Topology topology = build_topology(mesh);
+  Topology topology = build_topology(mesh, a.threads);
   ShapeApproximation s = naming_input(a.input, [&] { return approximate_shape(mesh, topology, options); });
   if (progress) std::fprintf(stderr, "\r%60s\r", "");
   if (!s.clustering.device_notice.empty() && !a.quiet)

@@ -83,7 +83,7 @@ void run_cluster(const ClusterArgs& a) {
   double topology_s = 0;   // build_topology: not file I/O, yet outside cluster()'s own timings
   {
     const auto t_topology = Clock::now();
-    Topology topology = build_topology(mesh);
+    Topology topology = build_topology(mesh, a.threads);
     topology_s = std::chrono::duration<double>(Clock::now() - t_topology).count();
     if (a.gradation > 0) {
       // As `coarsen --gradation`: the curvature of a copy whose parts are consistently oriented

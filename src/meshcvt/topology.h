@@ -70,9 +70,10 @@ struct Topology {
 ///         fit in 32 bits; OptionError otherwise).
 /// Output: the Topology above. O(F + V) time apart from sorting the few edges at each vertex;
 ///         about 30 bytes per face for the result (face_adjacent, vertex_faces, face_component,
-///         vertex_face_offsets) and only per-vertex scratch besides. Uses up to 2 threads on
-///         large meshes; the result does not depend on it.
-Topology build_topology(const Mesh& mesh);
+///         vertex_face_offsets) and per-vertex scratch besides (up to 12 bytes per vertex).
+/// threads: how many threads work on it, at most 16; 0 (the default): one per core, and one per
+///         32768 faces at most. The result does not depend on it.
+Topology build_topology(const Mesh& mesh, unsigned threads = 0);
 
 /// Orients every orientable component consistently: flips faces (swaps their corners 1 and 2) so
 /// that across each manifold edge the two faces run along it in opposite directions, as a
