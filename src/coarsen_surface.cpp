@@ -231,7 +231,7 @@ JobRun run_job(Mesh m, const std::vector<float>& d, const std::vector<uint32_t>&
                const CoarsenSurfaceOptions& options, bool prepare) {
   JobRun run;
   const auto start = Clock::now();
-  run.order = reorder_for_locality(m);
+  run.order = reorder_for_locality(m, kLocalityMinFaces, options.job.cluster.threads);
   CoarsenMeshOptions job = options.job;
   run.density = to_reordered(d, run.order);
   run.origin = run.order.identity() ? origin : inherited(origin, run.order.face_of);

@@ -5,6 +5,7 @@
 #include "meshcvt/mesh_order.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <thread>
@@ -18,29 +19,62 @@ namespace {
 
 constexpr uint32_t kNoVertex = 0xffffffffu;
 
+// Threads for a pass over `count` items, at most 16: `requested`, or for 0 one per core and at
+// most one per 32768 items (a thread costs ~50 us to start).
+unsigned thread_count(size_t count, unsigned requested) {
+  if (requested != 0) return std::min(requested, 16u);
+  const size_t by_size = std::max<size_t>(1, count / 32768);
+  return unsigned(std::min<size_t>({std::max(1u, std::thread::hardware_concurrency()), by_size, 16}));
+}
+
+// fn(begin, end, part) over [0, count) in `parts` ranges of about equal size.
+template <class Fn>
+void for_ranges(size_t count, unsigned parts, const Fn& fn) {
+  std::vector<uint32_t> bounds;
+  for (unsigned p = 0; p <= parts; ++p) bounds.push_back(uint32_t(count * p / parts));
+  run_ranges(bounds, fn);
+}
+
+// value = min(value, x), for values that several threads lower at once.
+inline void lower_to(uint32_t& value, uint32_t x) {
+  std::atomic_ref<uint32_t> v(value);
+  uint32_t seen = v.load(std::memory_order_relaxed);
+  while (x < seen && !v.compare_exchange_weak(seen, x, std::memory_order_relaxed)) {
+  }
+}
+
 }  // namespace
 
-LocalityOrder reorder_for_locality(Mesh& mesh, size_t min_faces) {
+LocalityOrder reorder_for_locality(Mesh& mesh, size_t min_faces, unsigned threads) {
   LocalityOrder order;
   const size_t nf = mesh.face_count(), nv = mesh.vertex_count();
   if (nf < min_faces || nf == 0) return order;
-  // The box of all vertices, read in order (a referenced vertex lies in it; an unreferenced one
-  // far away only makes the grid coarser).
+  const unsigned face_parts = thread_count(nf, threads), vertex_parts = thread_count(nv, threads);
+  // The box of all vertices (a referenced vertex lies in it; an unreferenced one far away only
+  // makes the grid coarser). Min and max do not depend on the split.
+  struct Box {
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  };
+  std::vector<Box> boxes(vertex_parts);
+  for_ranges(nv, vertex_parts, [&](size_t begin, size_t end, size_t part) {
+    Box& box = boxes[part];
+    for (size_t v = begin; v < end; ++v)
+      for (int k = 0; k < 3; ++k) {
+        const float x = mesh.positions[3 * v + k];
+        box.lo[k] = std::min(box.lo[k], x);
+        box.hi[k] = std::max(box.hi[k], x);
+      }
+  });
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (size_t v = 0; v < nv; ++v)
+  for (const Box& box : boxes)
     for (int k = 0; k < 3; ++k) {
-      float x = mesh.positions[3 * v + k];
-      lo[k] = std::min(lo[k], x);
-      hi[k] = std::max(hi[k], x);
+      lo[k] = std::min(lo[k], box.lo[k]);
+      hi[k] = std::max(hi[k], box.hi[k]);
     }
   float extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
   const float scale = extent > 0 && std::isfinite(extent) ? 1023.0f / extent : 0.0f;
   std::vector<uint32_t> key(nf);
-  // Keys in parallel (each face's own), the face ranges split in two or more.
-  const unsigned parts = std::max(1u, std::min(4u, std::thread::hardware_concurrency()));
-  std::vector<uint32_t> bounds;
-  for (unsigned p = 0; p <= parts; ++p) bounds.push_back(uint32_t(nf * p / parts));
-  run_ranges(bounds, [&](size_t begin, size_t end, size_t) {
+  for_ranges(nf, face_parts, [&](size_t begin, size_t end, size_t) {
     for (size_t f = begin; f < end; ++f) {
       uint32_t code = 0;
       for (int k = 0; k < 3; ++k) {
@@ -56,31 +90,58 @@ LocalityOrder reorder_for_locality(Mesh& mesh, size_t min_faces) {
   order.face_of = sort_by_key(key);
   std::vector<uint32_t>().swap(key);
 
-  // Vertices by first use; then the arrays are rebuilt in the new order.
+  // The corners in the new face order, still with the input's vertex ids: the passes below read
+  // them in order rather than through face_of.
+  std::vector<uint32_t> indices(3 * nf);
+  for_ranges(nf, face_parts, [&](size_t begin, size_t end, size_t) {
+    for (size_t i = begin; i < end; ++i)
+      for (int j = 0; j < 3; ++j) indices[3 * i + j] = mesh.indices[3 * size_t(order.face_of[i]) + j];
+  });
+  // Vertices by first use: a vertex's new id is the number of vertices whose first corner comes
+  // before its own. Each thread lowers the first corners of its corners' vertices, then counts the
+  // first corners in its range, and numbers them after those of the ranges before it.
+  const size_t corners = 3 * nf;
+  const unsigned corner_parts = face_parts;
+  std::vector<uint32_t> first(nv, kNoVertex);
+  for_ranges(corners, corner_parts, [&](size_t begin, size_t end, size_t) {
+    for (size_t k = begin; k < end; ++k) lower_to(first[indices[k]], uint32_t(k));
+  });
+  std::vector<uint32_t> firsts(corner_parts + 1, 0);
+  for_ranges(corners, corner_parts, [&](size_t begin, size_t end, size_t part) {
+    uint32_t n = 0;
+    for (size_t k = begin; k < end; ++k) n += first[indices[k]] == k;
+    firsts[part + 1] = n;
+  });
+  for (unsigned p = 0; p < corner_parts; ++p) firsts[p + 1] += firsts[p];
   std::vector<uint32_t> new_id(nv, kNoVertex);
-  order.vertex_of.reserve(nv);
-  for (uint32_t f : order.face_of)
-    for (int j = 0; j < 3; ++j) {
-      uint32_t v = mesh.indices[3 * size_t(f) + j];
-      if (new_id[v] == kNoVertex) {
-        new_id[v] = uint32_t(order.vertex_of.size());
-        order.vertex_of.push_back(v);
+  order.vertex_of.resize(nv);
+  for_ranges(corners, corner_parts, [&](size_t begin, size_t end, size_t part) {
+    uint32_t next = firsts[part];
+    for (size_t k = begin; k < end; ++k) {
+      const uint32_t v = indices[k];
+      if (first[v] == k) {
+        new_id[v] = next;
+        order.vertex_of[next++] = v;
       }
     }
+  });
+  std::vector<uint32_t>().swap(first);
+  uint32_t next = firsts[corner_parts];
   for (uint32_t v = 0; v < nv; ++v)
     if (new_id[v] == kNoVertex) {
-      new_id[v] = uint32_t(order.vertex_of.size());
-      order.vertex_of.push_back(v);
+      new_id[v] = next;
+      order.vertex_of[next++] = v;
     }
-  assert(order.vertex_of.size() == nv);
-
-  std::vector<uint32_t> indices(3 * nf);
-  for (size_t i = 0; i < nf; ++i)
-    for (int j = 0; j < 3; ++j) indices[3 * i + j] = new_id[mesh.indices[3 * size_t(order.face_of[i]) + j]];
+  assert(next == nv);
+  for_ranges(corners, corner_parts, [&](size_t begin, size_t end, size_t) {
+    for (size_t k = begin; k < end; ++k) indices[k] = new_id[indices[k]];
+  });
   mesh.indices.swap(indices);
   std::vector<float> positions(3 * nv);
-  for (size_t j = 0; j < nv; ++j)
-    for (int k = 0; k < 3; ++k) positions[3 * j + k] = mesh.positions[3 * size_t(order.vertex_of[j]) + k];
+  for_ranges(nv, vertex_parts, [&](size_t begin, size_t end, size_t) {
+    for (size_t j = begin; j < end; ++j)
+      for (int k = 0; k < 3; ++k) positions[3 * j + k] = mesh.positions[3 * size_t(order.vertex_of[j]) + k];
+  });
   mesh.positions.swap(positions);
   if (mesh.source_polygon.size() == nf) {
     std::vector<uint32_t> source(nf);

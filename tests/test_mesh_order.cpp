@@ -103,6 +103,33 @@ TEST_CASE("reorder_for_locality: same surface, exact restore, neighbours close i
   CHECK(m.source_polygon == input.source_polygon);
 }
 
+TEST_CASE("reorder_for_locality: every thread count gives the same order, vertices by first use") {
+  const Mesh input = shuffled_grid(30, 5);
+  Mesh one = input;
+  const LocalityOrder reference = reorder_for_locality(one, 0, 1);
+  // Vertices by first use in the new face order, the unreferenced one last.
+  std::vector<uint32_t> by_first_use;
+  std::vector<uint8_t> seen(input.vertex_count(), 0);
+  for (uint32_t f : reference.face_of)
+    for (int j = 0; j < 3; ++j) {
+      const uint32_t v = input.indices[3 * size_t(f) + j];
+      if (!seen[v]) seen[v] = 1, by_first_use.push_back(v);
+    }
+  for (uint32_t v = 0; v < input.vertex_count(); ++v)
+    if (!seen[v]) by_first_use.push_back(v);
+  CHECK(reference.vertex_of == by_first_use);
+  for (unsigned threads : {2u, 3u, 5u, 8u, 16u, 64u}) {
+    CAPTURE(threads);
+    Mesh m = input;
+    const LocalityOrder order = reorder_for_locality(m, 0, threads);
+    CHECK(order.face_of == reference.face_of);
+    CHECK(order.vertex_of == reference.vertex_of);
+    CHECK(m.indices == one.indices);
+    CHECK(m.positions == one.positions);
+    CHECK(m.source_polygon == one.source_polygon);
+  }
+}
+
 TEST_CASE("reorder_for_locality: small meshes are left alone; per-face values map both ways") {
   Mesh m = shuffled_grid(8, 3);
   const Mesh input = m;

@@ -133,7 +133,7 @@ void run_approximate(ApproximateArgs& a) {
 
   // Large meshes are partitioned in an order with locality (mesh_order.h); --partition is
   // written in the input's.
-  InputMesh input = read_input(a.input, !a.no_weld, a.quiet);
+  InputMesh input = read_input(a.input, !a.no_weld, a.quiet, a.threads);
   const Mesh& mesh = input.mesh;
   const LocalityOrder& order = input.order;
   Topology topology = build_topology(mesh, a.threads);

@@ -75,7 +75,7 @@ void run_cluster(const ClusterArgs& a) {
 
   check_mesh_format(a.output);  // before the work
   // Large meshes are clustered in an order with locality (mesh_order.h); outputs use the input's.
-  InputMesh input = read_input(a.input, !a.no_weld, a.quiet);
+  InputMesh input = read_input(a.input, !a.no_weld, a.quiet, a.threads);
   Mesh& mesh = input.mesh;
   const LocalityOrder& order = input.order;
   Clustering c;

@@ -41,15 +41,15 @@ void prepare_allocator(const std::string& input_path);
 Mesh read_mesh_noted(const std::string& path, const ReadOptions& options, bool quiet, ReadStats* stats = nullptr);
 
 /// The input of a partitioning command: read (weld: merge duplicate vertices; read_mesh_noted),
-/// then, when large, reordered for locality (reorder_for_locality); `order` restores the input's
-/// order for outputs.
+/// then, when large, reordered for locality (reorder_for_locality, on `threads` threads, 0: one per
+/// core); `order` restores the input's order for outputs.
 struct InputMesh {
   Mesh mesh;
   LocalityOrder order;
   ReadStats stats;
   double seconds = 0;  ///< reading and reordering
 };
-InputMesh read_input(const std::string& path, bool weld, bool quiet);
+InputMesh read_input(const std::string& path, bool weld, bool quiet, unsigned threads = 0);
 
 /// fn(), with an OptionError it throws given `path: ` in front: a mesh that does not allow the
 /// options (n too small for its components, more clusters than faces) is named in the message, so

@@ -110,14 +110,14 @@ Mesh read_mesh_noted(const std::string& path, const ReadOptions& options, bool q
   return mesh;
 }
 
-InputMesh read_input(const std::string& path, bool weld, bool quiet) {
+InputMesh read_input(const std::string& path, bool weld, bool quiet, unsigned threads) {
   prepare_allocator(path);
   auto t0 = std::chrono::steady_clock::now();
   InputMesh in;
   ReadOptions ro;
   ro.weld = weld;
   in.mesh = read_mesh_noted(path, ro, quiet, &in.stats);
-  in.order = reorder_for_locality(in.mesh);
+  in.order = reorder_for_locality(in.mesh, kLocalityMinFaces, threads);
   in.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return in;
 }

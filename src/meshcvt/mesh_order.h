@@ -31,7 +31,9 @@ struct LocalityOrder {
 /// deterministic), vertices by first use in the new face order (unreferenced vertices last, in
 /// input order); source_polygon follows the faces. The geometry and the orientation of every face are unchanged. O(F).
 /// Meshes with fewer than `min_faces` faces are left as they are (an identity order is returned).
-LocalityOrder reorder_for_locality(Mesh& mesh, size_t min_faces = kLocalityMinFaces);
+/// threads: how many threads work on it, at most 16; 0 (the default): one per core, and one per
+/// 32768 faces at most. The result does not depend on it.
+LocalityOrder reorder_for_locality(Mesh& mesh, size_t min_faces = kLocalityMinFaces, unsigned threads = 0);
 
 /// Puts a mesh reordered by reorder_for_locality back in its input order (exactly: same arrays).
 void restore_input_order(Mesh& mesh, const LocalityOrder& order);
