@@ -48,7 +48,9 @@ inline void lower_to(uint32_t& value, uint32_t x) {
 LocalityOrder reorder_for_locality(Mesh& mesh, size_t min_faces, unsigned threads) {
   LocalityOrder order;
   const size_t nf = mesh.face_count(), nv = mesh.vertex_count();
-  if (nf < min_faces || nf == 0) return order;
+  // (Corner positions 3 i + j are 32-bit below; a mesh with more faces is refused later anyway,
+  // by build_topology.)
+  if (nf < min_faces || nf == 0 || nf > (kNoVertex - 1) / 3) return order;
   const unsigned face_parts = thread_count(nf, threads), vertex_parts = thread_count(nv, threads);
   // The box of all vertices (a referenced vertex lies in it; an unreferenced one far away only
   // makes the grid coarser). Min and max do not depend on the split.
