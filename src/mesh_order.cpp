@@ -8,7 +8,6 @@
 #include <atomic>
 #include <cassert>
 #include <cmath>
-#include <thread>
 
 #include "morton.h"
 #include "parallel.h"
@@ -19,20 +18,10 @@ namespace {
 
 constexpr uint32_t kNoVertex = 0xffffffffu;
 
-// Threads for a pass over `count` items, at most 16: `requested`, or for 0 one per core and at
-// most one per 32768 items (a thread costs ~50 us to start).
-unsigned thread_count(size_t count, unsigned requested) {
-  if (requested != 0) return std::min(requested, 16u);
-  const size_t by_size = std::max<size_t>(1, count / 32768);
-  return unsigned(std::min<size_t>({std::max(1u, std::thread::hardware_concurrency()), by_size, 16}));
-}
-
 // fn(begin, end, part) over [0, count) in `parts` ranges of about equal size.
 template <class Fn>
 void for_ranges(size_t count, unsigned parts, const Fn& fn) {
-  std::vector<uint32_t> bounds;
-  for (unsigned p = 0; p <= parts; ++p) bounds.push_back(uint32_t(count * p / parts));
-  run_ranges(bounds, fn);
+  run_ranges(even_bounds(count, parts), fn);
 }
 
 // value = min(value, x), for values that several threads lower at once.
@@ -51,7 +40,7 @@ LocalityOrder reorder_for_locality(Mesh& mesh, size_t min_faces, unsigned thread
   // (Corner positions 3 i + j are 32-bit below; a mesh with more faces is refused later anyway,
   // by build_topology.)
   if (nf < min_faces || nf == 0 || nf > (kNoVertex - 1) / 3) return order;
-  const unsigned face_parts = thread_count(nf, threads), vertex_parts = thread_count(nv, threads);
+  const unsigned face_parts = range_threads(nf, threads), vertex_parts = range_threads(nv, threads);
   // The box of all vertices (a referenced vertex lies in it; an unreferenced one far away only
   // makes the grid coarser). Min and max do not depend on the split.
   struct Box {

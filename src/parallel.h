@@ -3,6 +3,7 @@
 // changes a result.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>
@@ -56,6 +57,25 @@ class WorkerPool {
   std::atomic<bool> stop_{false};
   std::exception_ptr error_;
 };
+
+// Threads for one-shot passes over `count` items (run_ranges), at most kMaxRangeThreads:
+// `requested`, or for 0 one per core and at most one per kItemsPerRangeThread items (a thread
+// costs ~50 us to start; the passes it serves are bound by memory beyond a dozen threads).
+constexpr unsigned kMaxRangeThreads = 16;
+constexpr size_t kItemsPerRangeThread = 32768;
+inline unsigned range_threads(size_t count, unsigned requested) {
+  if (requested != 0) return std::min(requested, kMaxRangeThreads);
+  const size_t by_size = std::max<size_t>(1, count / kItemsPerRangeThread);
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  return unsigned(std::min<size_t>({cores, by_size, kMaxRangeThreads}));
+}
+
+// Bounds of `parts` ranges of [0, count) of about equal size, for run_ranges.
+inline std::vector<uint32_t> even_bounds(size_t count, unsigned parts) {
+  std::vector<uint32_t> bounds;
+  for (unsigned p = 0; p <= parts; ++p) bounds.push_back(uint32_t(count * p / parts));
+  return bounds;
+}
 
 // One-shot alternative to WorkerPool for a single parallel pass with uneven ranges (topology,
 // subdivision): runs fn(begin, end, part) for the ranges [bounds[p], bounds[p+1]), part 0 on the calling thread,

@@ -21,7 +21,6 @@
 #include <exception>
 #include <string>
 #include <system_error>
-#include <thread>
 
 #include "meshcvt/error.h"
 
@@ -62,24 +61,6 @@ std::vector<uint32_t> split_vertices(const Topology& t, size_t vertex_count, uns
   return bounds;
 }
 
-// Threads for build_topology, at most kMaxThreads: `requested`, or for 0 one per core and at most
-// one per kFacesPerThread faces (a thread costs ~50 us to start). The passes are bound by memory
-// beyond a dozen threads.
-constexpr size_t kFacesPerThread = 32768;
-constexpr unsigned kMaxThreads = 16;
-unsigned thread_count(size_t face_count, unsigned requested) {
-  if (requested != 0) return std::min(requested, kMaxThreads);
-  const size_t by_size = std::max<size_t>(1, face_count / kFacesPerThread);
-  return unsigned(std::min<size_t>({std::max(1u, std::thread::hardware_concurrency()), by_size, kMaxThreads}));
-}
-
-// Index ranges [bounds[p], bounds[p + 1]) of about count / parts each.
-std::vector<uint32_t> split_evenly(size_t count, unsigned parts) {
-  std::vector<uint32_t> bounds;
-  for (unsigned p = 0; p <= parts; ++p) bounds.push_back(uint32_t(count * p / parts));
-  return bounds;
-}
-
 // Vertex -> faces CSR, each face once per distinct corner, face ids increasing: a counting sort of
 // the corners in face order. Each thread counts the corners of its range of faces into an array of
 // its own; a vertex's slots of a later range follow those of the earlier ones, so the order stays
@@ -96,7 +77,7 @@ void build_vertex_faces(const Mesh& mesh, Topology& t, unsigned parts) {
   offsets.assign(nv + 1, 0);
   // Part 0 counts into offsets[v + 1], part p > 0 into later[p - 1][v].
   std::vector<std::vector<uint32_t>> later(parts - 1, std::vector<uint32_t>(nv, 0));
-  const std::vector<uint32_t> face_bounds = split_evenly(nf, parts);
+  const std::vector<uint32_t> face_bounds = even_bounds(nf, parts);
   run_ranges(face_bounds, [&](uint32_t begin, uint32_t end, size_t part) {
     uint32_t* count = part == 0 ? offsets.data() + 1 : later[part - 1].data();
     for (size_t f = begin; f < end; ++f) {
@@ -427,7 +408,7 @@ void label_components(Topology& t, size_t nf, unsigned parts) {
   // Each thread joins the faces of its range across the edges inside it: a root is the lowest face
   // of its tree, so every tree (and every write) stays in the range. The edges that leave a range
   // are joined afterwards, on this thread; on a mesh in locality order they are few.
-  const std::vector<uint32_t> bounds = split_evenly(nf, parts);
+  const std::vector<uint32_t> bounds = even_bounds(nf, parts);
   run_ranges(bounds, [&](uint32_t begin, uint32_t end, size_t) {
     for (uint32_t f = begin; f < end; ++f) parent[f] = f;
     for (uint32_t f = begin; f < end; ++f)
@@ -522,7 +503,7 @@ void count_face_defects(const Mesh& mesh, Topology& t, unsigned parts) {
   };
   std::vector<std::vector<Triple>> triples(parts);
   std::vector<uint64_t> degenerate(parts, 0);
-  run_ranges(split_evenly(mesh.face_count(), parts), [&](uint32_t begin, uint32_t end, size_t part) {
+  run_ranges(even_bounds(mesh.face_count(), parts), [&](uint32_t begin, uint32_t end, size_t part) {
     uint64_t n = 0;
     for (size_t f = begin; f < end; ++f) {
       if (is_collapsed(indices, f)) {
@@ -565,7 +546,7 @@ Topology build_topology(const Mesh& mesh, unsigned threads_requested) {
                         " but the mesh has " + std::to_string(nv) + " vertices");
 
   Topology t;
-  unsigned threads = thread_count(nf, threads_requested);
+  unsigned threads = range_threads(nf, threads_requested);
   build_vertex_faces(mesh, t, threads);
 
   t.face_adjacent.assign(3 * nf, kNone);
