@@ -356,7 +356,7 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
           ? subdivision_levels_for(result.input_faces, n, subdivision_faces_per_cluster(placement))
           : unsigned(subdivide);
   if (result.subdivision_levels > 0) {
-    mesh = subdivide_midpoint(mesh, result.subdivision_levels);
+    mesh = subdivide_midpoint(mesh, result.subdivision_levels, options.job.cluster.threads);
     origin = to_children(origin, result.subdivision_levels);
     density = to_children(density, result.subdivision_levels);
   }
@@ -474,7 +474,7 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
   if (run.job.defects_remain && options.subdivide == kSubdivideByPlacement && options.retry_subdivided &&
       4 * uint64_t(base.surface.face_count()) <= options.max_retry_faces) {
     // Its density and origins (reordered with its surface), to the children.
-    if (keep_if_better(run_job(subdivide_midpoint(base.surface, 1), to_children(base.density, 1),
+    if (keep_if_better(run_job(subdivide_midpoint(base.surface, 1, options.job.cluster.threads), to_children(base.density, 1),
                                to_children(base.origin, 1), options, prepare),
                        CoarsenSurfaceJob::subdivided)) {
       result.retried_subdivided = true;

@@ -28,7 +28,6 @@
 #include <cassert>
 #include <cmath>
 #include <string>
-#include <thread>
 
 #include "meshcvt/error.h"
 #include "parallel.h"
@@ -50,13 +49,9 @@ constexpr double kThinFace = 1e-6;
 // (bench/RESULTS.md, "Coarsening: gradation and subdivision"). Six smooth away more of the gain.
 constexpr int kSmoothingPasses = 4;
 
-// [0, count) in up to two ranges: a second thread only pays off on large inputs.
-std::vector<uint32_t> split(size_t count) {
-  unsigned parts = count >= 65536 ? std::min(2u, std::max(1u, std::thread::hardware_concurrency())) : 1u;
-  std::vector<uint32_t> bounds;
-  for (unsigned p = 0; p <= parts; ++p) bounds.push_back(uint32_t(uint64_t(count) * p / parts));
-  return bounds;
-}
+// [0, count) in one range per thread (range_threads: one per core on large inputs). Every pass
+// below computes each item on its own, so the split changes no result.
+std::vector<uint32_t> split(size_t count) { return even_bounds(count, range_threads(count, 0)); }
 
 void check_mesh(const Mesh& mesh) {
   if (mesh.indices.size() % 3 != 0 || mesh.positions.size() % 3 != 0)

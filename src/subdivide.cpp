@@ -13,7 +13,6 @@
 #include <exception>
 #include <string>
 #include <system_error>
-#include <thread>
 #include <vector>
 
 #include "meshcvt/error.h"
@@ -28,9 +27,8 @@ constexpr uint64_t kMaxVertices = 0xfffffffeu;      // below kNone
 inline uint32_t next_half_edge(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
 
 
-// Splits [0, count) into ranges of about equal weight, weight given by the CSR `offsets`.
-std::vector<uint32_t> split_by_offsets(const std::vector<uint32_t>& offsets, size_t count, bool parallel) {
-  unsigned parts = parallel ? std::min(2u, std::max(1u, std::thread::hardware_concurrency())) : 1u;
+// Splits [0, count) into `parts` ranges of about equal weight, weight given by the CSR `offsets`.
+std::vector<uint32_t> split_by_offsets(const std::vector<uint32_t>& offsets, size_t count, unsigned parts) {
   std::vector<uint32_t> bounds{0};
   for (unsigned p = 1; p < parts; ++p) {
     uint32_t goal = uint32_t(uint64_t(offsets[count]) * p / parts);
@@ -55,10 +53,11 @@ void sort_small(uint64_t* first, uint64_t* last) {
 }
 
 // One level: `in` -> `out`, faces 4f..4f+3 from face f.
-void subdivide_level(const Mesh& in, Mesh& out) {
+// parts: threads for the passes over vertices and faces (each range's edges are numbered after
+// those of the ranges before it, so the result does not depend on it).
+void subdivide_level(const Mesh& in, Mesh& out, unsigned parts) {
   size_t nv = in.vertex_count(), nf = in.face_count();
   const uint32_t* indices = in.indices.data();
-  bool parallel = nf >= 65536;
 
   // Half-edges grouped by lower vertex: counting sort, keys (higher vertex << 32 | half-edge).
   std::vector<uint32_t> offsets(nv + 1, 0);
@@ -76,7 +75,7 @@ void subdivide_level(const Mesh& in, Mesh& out) {
   offsets[0] = 0;
 
   // Pass 1: sort each vertex's keys and count its edges, per range.
-  std::vector<uint32_t> bounds = split_by_offsets(offsets, nv, parallel);
+  std::vector<uint32_t> bounds = split_by_offsets(offsets, nv, parts);
   std::vector<uint64_t> range_edges(bounds.size() - 1, 0);
   run_ranges(bounds, [&](uint32_t begin, uint32_t end, size_t part) {
     uint64_t edges = 0;
@@ -127,10 +126,7 @@ void subdivide_level(const Mesh& in, Mesh& out) {
   keys = {};
 
   out.indices.resize(12 * nf);
-  std::vector<uint32_t> face_bounds{0};
-  if (parallel) face_bounds.push_back(uint32_t(nf / 2));
-  face_bounds.push_back(uint32_t(nf));
-  run_ranges(face_bounds, [&](uint32_t begin, uint32_t end, size_t) {
+  run_ranges(even_bounds(nf, parts), [&](uint32_t begin, uint32_t end, size_t) {
     uint32_t* o = out.indices.data();
     for (size_t f = begin; f < end; ++f) {
       uint32_t a = indices[3 * f], b = indices[3 * f + 1], c = indices[3 * f + 2];
@@ -146,7 +142,7 @@ void subdivide_level(const Mesh& in, Mesh& out) {
 
 }  // namespace
 
-Mesh subdivide_midpoint(const Mesh& mesh, unsigned levels) {
+Mesh subdivide_midpoint(const Mesh& mesh, unsigned levels, unsigned threads) {
   size_t nv = mesh.vertex_count(), nf = mesh.face_count();
   if (mesh.indices.size() % 3 != 0 || mesh.positions.size() % 3 != 0)
     throw OptionError("mesh arrays are not whole triangles / vertices");
@@ -169,7 +165,7 @@ Mesh subdivide_midpoint(const Mesh& mesh, unsigned levels) {
   Mesh current, next;
   const Mesh* in = &mesh;
   for (unsigned k = 0; k < levels; ++k) {
-    subdivide_level(*in, next);
+    subdivide_level(*in, next, range_threads(in->face_count(), threads));
     std::swap(current, next);
     in = &current;
   }

@@ -11,6 +11,7 @@
 #include "meshcvt/mesh.h"
 #include "meshcvt/subdivide.h"
 #include "meshcvt/topology.h"
+#include "test_meshes.h"
 
 using meshcvt::Mesh;
 
@@ -141,7 +142,8 @@ TEST_CASE("subdivide: non-manifold edge and collapsed face survive") {
 }
 
 TEST_CASE("subdivide: large enough for the threaded path, same as the sum of its parts") {
-  // The last level, from 131072 faces, runs on two threads; check the result against invariants.
+  // The last level, from 131072 faces, runs on up to four threads (one per 32768 faces, as the
+  // cores allow); check the result against invariants.
   Mesh m = octahedron();
   Mesh s = meshcvt::subdivide_midpoint(m, 8);
   meshcvt::MeshInfo info = meshcvt::mesh_info(s, meshcvt::build_topology(s));
@@ -151,6 +153,26 @@ TEST_CASE("subdivide: large enough for the threaded path, same as the sum of its
   CHECK(info.orientation_flips == 0);
   CHECK(info.duplicate_faces == 0);
   CHECK(info.genus == 0);
+}
+
+TEST_CASE("subdivide: every thread count gives the same mesh") {
+  // A torus with a fin on one edge and a collapsed face, faces in scrambled order: each level's
+  // edges are numbered per range of vertices, then put together.
+  Mesh m = meshcvt::test::torus(20, 9);
+  const uint32_t fin = uint32_t(m.vertex_count());
+  meshcvt::test::add_vertex(m, 0.3, 0.2, 0.9);
+  m.indices.insert(m.indices.end(), {m.indices[0], m.indices[1], fin, m.indices[5], m.indices[5], m.indices[7]});
+  const size_t nf = m.face_count();
+  for (size_t f = 0; f + 1 < nf; f += 3)
+    for (int c = 0; c < 3; ++c) std::swap(m.indices[3 * f + c], m.indices[3 * (nf - 1 - f) + c]);
+  const Mesh one = meshcvt::subdivide_midpoint(m, 2, 1);
+  for (unsigned threads : {2u, 3u, 7u, 16u, 100u}) {
+    CAPTURE(threads);
+    const Mesh s = meshcvt::subdivide_midpoint(m, 2, threads);
+    CHECK(s.indices == one.indices);
+    CHECK(s.positions == one.positions);
+    CHECK(s.source_polygon == one.source_polygon);
+  }
 }
 
 TEST_CASE("subdivision_levels_for: smallest k with faces * 4^k >= clusters * min") {

@@ -52,8 +52,8 @@ inline constexpr double kDefaultMaxDensityRatio = 256;
 ///
 /// Throws OptionError when g is negative or not finite, max_ratio is not in [1, 1e30], a face
 /// uses a vertex that does not exist, or mesh and topology do not match. O(F + V) time, about 16
-/// bytes per vertex and 8 per face besides the result, up to two threads on large meshes (the
-/// result does not depend on it).
+/// bytes per vertex and 8 per face besides the result, one thread per core (up to 16) on large
+/// meshes (the result does not depend on it).
 std::vector<float> curvature_density(const Mesh& mesh, const Topology& topology, double gradation,
                                      double max_ratio = kDefaultMaxDensityRatio);
 

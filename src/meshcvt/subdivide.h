@@ -26,7 +26,9 @@ namespace meshcvt {
 ///         (up to float rounding of the midpoints).
 /// Throws OptionError when the result would have more than 1431655765 faces or 4294967294
 /// vertices (32-bit indices).
-Mesh subdivide_midpoint(const Mesh& mesh, unsigned levels);
+/// threads: how many threads work on each level, at most 16; 0 (the default): one per core, and
+/// one per 32768 faces of the level at most. The result does not depend on it.
+Mesh subdivide_midpoint(const Mesh& mesh, unsigned levels, unsigned threads = 0);
 
 /// What subdivide_faces made.
 struct SubdividedFaces {
