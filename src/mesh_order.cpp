@@ -92,21 +92,20 @@ LocalityOrder reorder_for_locality(Mesh& mesh, size_t min_faces, unsigned thread
   // before its own. Each thread lowers the first corners of its corners' vertices, then counts the
   // first corners in its range, and numbers them after those of the ranges before it.
   const size_t corners = 3 * nf;
-  const unsigned corner_parts = face_parts;
   std::vector<uint32_t> first(nv, kNoVertex);
-  for_ranges(corners, corner_parts, [&](size_t begin, size_t end, size_t) {
+  for_ranges(corners, face_parts, [&](size_t begin, size_t end, size_t) {
     for (size_t k = begin; k < end; ++k) lower_to(first[indices[k]], uint32_t(k));
   });
-  std::vector<uint32_t> firsts(corner_parts + 1, 0);
-  for_ranges(corners, corner_parts, [&](size_t begin, size_t end, size_t part) {
+  std::vector<uint32_t> firsts(face_parts + 1, 0);
+  for_ranges(corners, face_parts, [&](size_t begin, size_t end, size_t part) {
     uint32_t n = 0;
     for (size_t k = begin; k < end; ++k) n += first[indices[k]] == k;
     firsts[part + 1] = n;
   });
-  for (unsigned p = 0; p < corner_parts; ++p) firsts[p + 1] += firsts[p];
+  for (unsigned p = 0; p < face_parts; ++p) firsts[p + 1] += firsts[p];
   std::vector<uint32_t> new_id(nv, kNoVertex);
   order.vertex_of.resize(nv);
-  for_ranges(corners, corner_parts, [&](size_t begin, size_t end, size_t part) {
+  for_ranges(corners, face_parts, [&](size_t begin, size_t end, size_t part) {
     uint32_t next = firsts[part];
     for (size_t k = begin; k < end; ++k) {
       const uint32_t v = indices[k];
@@ -117,14 +116,14 @@ LocalityOrder reorder_for_locality(Mesh& mesh, size_t min_faces, unsigned thread
     }
   });
   std::vector<uint32_t>().swap(first);
-  uint32_t next = firsts[corner_parts];
+  uint32_t next = firsts[face_parts];
   for (uint32_t v = 0; v < nv; ++v)
     if (new_id[v] == kNoVertex) {
       new_id[v] = next;
       order.vertex_of[next++] = v;
     }
   assert(next == nv);
-  for_ranges(corners, corner_parts, [&](size_t begin, size_t end, size_t) {
+  for_ranges(corners, face_parts, [&](size_t begin, size_t end, size_t) {
     for (size_t k = begin; k < end; ++k) indices[k] = new_id[indices[k]];
   });
   mesh.indices.swap(indices);

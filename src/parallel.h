@@ -60,7 +60,8 @@ class WorkerPool {
 
 // Threads for one-shot passes over `count` items (run_ranges), at most kMaxRangeThreads:
 // `requested`, or for 0 one per core and at most one per kItemsPerRangeThread items (a thread
-// costs ~50 us to start; the passes it serves are bound by memory beyond a dozen threads).
+// costs ~50 us to start). The passes gain little from more: build_topology on the 4.8M bunny took
+// 362 ms on 8 threads and 273 ms on 16 (bench/RESULTS.md).
 constexpr unsigned kMaxRangeThreads = 16;
 constexpr size_t kItemsPerRangeThread = 32768;
 inline unsigned range_threads(size_t count, unsigned requested) {

@@ -41,7 +41,8 @@ void write_report(const ClusterArgs& a, const Mesh& mesh, const Clustering& c, c
       .value("reassigned_faces", c.repair.reassigned_faces).value("dissolved_isolated", c.repair.dissolved_isolated)
       .value("restored_clusters", c.repair.restored_clusters).end_object();
   j.begin_object("timings_s").value("read", read_s).value("setup", c.timings.setup).value("init", c.timings.init)
-      .value("init_lloyd", c.timings.init_lloyd).value("topology", topology_s).value("iterate", c.timings.iterate).value("repair", c.timings.repair).value("cluster_total", c.timings.total)
+      .value("init_lloyd", c.timings.init_lloyd).value("topology", topology_s).value("iterate", c.timings.iterate)
+      .value("repair", c.timings.repair).value("cluster_total", c.timings.total)
       .value("write", write_s).end_object();
   j.begin_array("history");
   for (const IterationRecord& r : c.history)
