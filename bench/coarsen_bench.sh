@@ -40,10 +40,10 @@ echo "== build ($build, release)"
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$build" -j "$(nproc)" --target meshcvt >/dev/null
 g++ -std=c++20 -O2 -ffp-contract=off -Isrc bench/coarsen_bench.cpp "$build/libmeshcvt.a" \
-  -ltinyobjloader -lpthread -ldl -o "$build/coarsen_bench"
+  -ltinyobjloader_double -lpthread -ldl -o "$build/coarsen_bench"
 
 g++ -std=c++20 -O2 -ffp-contract=off -Isrc bench/coarsen_fix_bench.cpp "$build/libmeshcvt.a" \
-  -ltinyobjloader -lpthread -ldl -o "$build/coarsen_fix_bench"
+  -ltinyobjloader_double -lpthread -ldl -o "$build/coarsen_fix_bench"
 
 echo "== machine: $(nproc) cores, $(uname -m); load average now: $(cut -d' ' -f1-3 /proc/loadavg)"
 meshes=$(dirname "$mesh")

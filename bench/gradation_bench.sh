@@ -77,7 +77,7 @@ done
 
 echo "== 3. time of curvature_density (bench/density_bench.cpp)"
 g++ -std=c++20 -O2 -ffp-contract=off -Isrc bench/density_bench.cpp "$build/libmeshcvt.a" \
-  -ltinyobjloader -lpthread -ldl -o "$build/density_bench"
+  -ltinyobjloader_double -lpthread -ldl -o "$build/density_bench"
 for m in "$meshes/bunny00.off" bench/data/bunny-1.2M.ply bench/data/bunny-4.8M.ply; do
   [ -f "$m" ] && "$build/density_bench" "$m" 3
 done

@@ -29,7 +29,7 @@ else
   # bench/ is not part of the build yet: build the library and link the program by hand.
   cmake --build "$build" --target meshcvt
   c++ -std=c++20 -O2 -Isrc bench/io_read_bench.cpp -o "$build/io_read_bench" "$build/libmeshcvt.a" \
-    -ltinyobjloader -ldl -pthread
+    -ltinyobjloader_double -ldl -pthread
   bench=$build/io_read_bench
 fi
 

@@ -20,7 +20,7 @@ cmake --build build-bench --target meshcvt >/dev/null
 embree=()
 if [ -f /usr/include/embree3/rtcore.h ]; then embree=(-DWITH_EMBREE -lembree3); fi
 c++ -std=c++20 -O2 -DNDEBUG -ffp-contract=off -Isrc bench/quality_bench.cpp build-bench/libmeshcvt.a \
-  -ltinyobjloader -pthread -ldl "${embree[@]}" -o build-bench/quality_bench
+  -ltinyobjloader_double -pthread -ldl "${embree[@]}" -o build-bench/quality_bench
 
 # CGAL's demo meshes (data.tar.gz inside Debian's libcgal-demo): downloaded and unpacked into a
 # cache outside the tree (shared with the other benchmarks), never committed.

@@ -21,7 +21,7 @@ cmake -S . -B build-bench-topo -G Ninja -DCMAKE_BUILD_TYPE=Release -DMESHCVT_TES
 cmake --build build-bench-topo --target meshcvt_cli meshcvt >/dev/null
 cli=build-bench-topo/meshcvt
 c++ -std=c++20 -O3 -DNDEBUG -ffp-contract=off -Isrc bench/topology_bench.cpp build-bench-topo/libmeshcvt.a \
-  -ltinyobjloader -pthread -ldl -o build-bench-topo/topology_bench
+  -ltinyobjloader_double -pthread -ldl -o build-bench-topo/topology_bench
 
 meshes=build-bench-topo/cgal/data/meshes
 if [ ! -f "$meshes/bunny00.off" ]; then

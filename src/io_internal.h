@@ -6,6 +6,7 @@
 // beside the target and renames it only when complete.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -41,7 +42,9 @@ FileData read_file(const std::string& path);
 /// Polygons are fanned from their first corner as they arrive (begin_polygon / add_corner /
 /// end_polygon), so no reader needs a per-polygon buffer.
 struct RawMesh {
-  std::vector<float> positions;   // 3 per file vertex
+  /// 3 per file vertex, as the file gives them (a float file's floats, a text file's decimals read
+  /// to double by parse_coordinate): read_mesh may move them before rounding to float.
+  std::vector<double> positions;
   std::vector<uint32_t> indices;  // 3 per triangle, into positions
   /// Source polygon of each triangle; stays empty while it is the identity (only triangles so far).
   std::vector<uint32_t> source_polygon;
@@ -169,6 +172,13 @@ enum class NumberStatus { ok, not_a_number, not_finite, out_of_range };
 /// trailing characters not_a_number. Values too small for float become (signed) zero or denormals.
 NumberStatus parse_float(std::string_view token, float& value);
 
+/// Parses a whole token as a coordinate: the same statuses as parse_float (a coordinate must fit a
+/// float), the value to double precision, nudged by one unit in its last place where rounding the
+/// double to float would not give parse_float's correctly rounded float (a double exactly halfway
+/// between two floats, from a decimal that was not): static_cast<float>(value) is always what
+/// parse_float gives, so a mesh that read_mesh does not move reads exactly as from floats.
+NumberStatus parse_coordinate(std::string_view token, double& value);
+
 /// Parses a whole token as a decimal integer with optional sign.
 NumberStatus parse_int(std::string_view token, int64_t& value);
 
@@ -246,6 +256,11 @@ class TextWriter {
   TextWriter& number(float value);
   TextWriter& number(uint64_t value);
   TextWriter& number(int64_t value);
+  /// The shortest decimal that reads back as this double.
+  TextWriter& number(double value);
+  /// "x y z" of position v (3 floats each) plus `origin`: floats as number(float) does when the
+  /// origin is zero, else each double sum as number(double) does.
+  TextWriter& position(const float* positions, size_t v, const std::array<double, 3>& origin);
   TextWriter& text(std::string_view text) {
     out_.write(text);
     return *this;
@@ -260,10 +275,13 @@ class TextWriter {
   OutputFile& out_;
 };
 
+/// Whether an origin moves anything (WriteOptions::origin).
+inline bool is_zero(const std::array<double, 3>& origin) { return origin[0] == 0 && origin[1] == 0 && origin[2] == 0; }
+
 // The writers (io_*.cpp); io.cpp has checked the mesh (indices in range, label count).
-void write_obj(OutputFile& out, const Mesh& mesh);
-void write_off(OutputFile& out, const Mesh& mesh);
+void write_obj(OutputFile& out, const Mesh& mesh, const WriteOptions& options);
+void write_off(OutputFile& out, const Mesh& mesh, const WriteOptions& options);
 void write_ply(OutputFile& out, const Mesh& mesh, const WriteOptions& options);
-void write_stl(OutputFile& out, const Mesh& mesh);
+void write_stl(OutputFile& out, const Mesh& mesh, const WriteOptions& options);
 
 }  // namespace meshcvt::io

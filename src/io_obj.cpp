@@ -9,7 +9,8 @@
 // ("1/2/3/4", "1//"), zero or out-of-range indices (relative ones against the vertices defined so
 // far, absolute ones against the final count) and NUL bytes. What is left for the callbacks is
 // exactly what tinyobjloader reads correctly; coordinates that overflow float ("1e39") show up as
-// infinities afterwards and are traced back to their line.
+// values beyond float range afterwards and are traced back to their line. Coordinates come as
+// doubles (tinyobjloader's double build), for read_mesh to move a far mesh before rounding.
 //
 // Only faces are read: points, lines, groups, materials, smoothing groups are ignored, and "mtllib"
 // opens no file (no material reader is passed).
@@ -330,11 +331,15 @@ struct Collector {
   uint64_t failed_face = 0;
 };
 
+// tinyobjloader's double build (TINYOBJLOADER_USE_DOUBLE, from its CMake target): its float build
+// rounds the same double parse to float, so a mesh read_mesh does not move reads the same floats.
+static_assert(sizeof(tinyobj::real_t) == sizeof(double), "link tinyobjloader::tinyobjloader_double");
+
 void on_vertex(void* user, tinyobj::real_t x, tinyobj::real_t y, tinyobj::real_t z, tinyobj::real_t) {
   Collector& c = *static_cast<Collector*>(user);
-  c.mesh.positions.push_back(static_cast<float>(x));
-  c.mesh.positions.push_back(static_cast<float>(y));
-  c.mesh.positions.push_back(static_cast<float>(z));
+  c.mesh.positions.push_back(x);
+  c.mesh.positions.push_back(y);
+  c.mesh.positions.push_back(z);
   ++c.vertex_count;
 }
 
@@ -393,10 +398,11 @@ ReadResult read_obj(const FileData& file) {
       throw FileError(file.path, "internal error: vertex index out of range after validation");
     }
   }
-  // Tokens that are numbers but exceed float range arrive as infinities: find their line.
-  const std::vector<float>& positions = collector.mesh.positions;
+  // Tokens that are numbers but exceed float range arrive as values that round to infinities (or
+  // are infinite already): find their line.
+  const std::vector<double>& positions = collector.mesh.positions;
   for (size_t i = 0; i < positions.size(); ++i) {
-    if (!std::isfinite(positions[i])) {
+    if (!std::isfinite(static_cast<float>(positions[i]))) {
       throw FileError::at_line(file.path, line_of_vertex(file, i / 3), "coordinate out of float range");
     }
   }
@@ -407,13 +413,12 @@ ReadResult read_obj(const FileData& file) {
   return result;
 }
 
-void write_obj(OutputFile& out, const Mesh& mesh) {
+void write_obj(OutputFile& out, const Mesh& mesh, const WriteOptions& options) {
   TextWriter text(out);
   text.text("# meshcvt\n");
   const size_t vertex_count = mesh.vertex_count();
   for (size_t v = 0; v < vertex_count; ++v) {
-    text.text("v ").number(mesh.positions[3 * v]).ch(' ').number(mesh.positions[3 * v + 1]).ch(' ');
-    text.number(mesh.positions[3 * v + 2]).ch('\n');
+    text.text("v ").position(mesh.positions.data(), v, options.origin).ch('\n');
   }
   const size_t face_count = mesh.face_count();
   for (size_t f = 0; f < face_count; ++f) {

@@ -141,8 +141,11 @@ class OffReader {
   }
 
   // Parses a number and names the problem; positions must also be finite.
-  void number(std::string_view token, float& value, bool must_be_finite) {
-    switch (parse_float(token, value)) {
+  void number(std::string_view token, float& value, bool must_be_finite) { check(parse_float(token, value), token, must_be_finite); }
+  void coordinate(std::string_view token, double& value) { check(parse_coordinate(token, value), token, true); }
+
+  void check(NumberStatus status, std::string_view token, bool must_be_finite) {
+    switch (status) {
       case NumberStatus::ok:
         return;
       case NumberStatus::not_a_number:
@@ -175,8 +178,8 @@ class OffReader {
       for (int axis = 0; axis < 3; ++axis) {
         const std::string_view token = off_token(c_);
         if (token.empty()) fail(c_.line, "vertex line has " + std::to_string(axis) + " values, needs 3");
-        float value = 0;
-        number(token, value, true);
+        double value = 0;
+        coordinate(token, value);
         mesh_.positions.push_back(value);
       }
       skip_extra_values();
@@ -259,13 +262,12 @@ class OffReader {
 
 ReadResult read_off(const FileData& file) { return OffReader(file).read(); }
 
-void write_off(OutputFile& out, const Mesh& mesh) {
+void write_off(OutputFile& out, const Mesh& mesh, const WriteOptions& options) {
   TextWriter text(out);
   text.text("OFF\n").number(uint64_t(mesh.vertex_count())).ch(' ').number(uint64_t(mesh.face_count())).text(" 0\n");
   const size_t vertex_count = mesh.vertex_count();
   for (size_t v = 0; v < vertex_count; ++v) {
-    text.number(mesh.positions[3 * v]).ch(' ').number(mesh.positions[3 * v + 1]).ch(' ');
-    text.number(mesh.positions[3 * v + 2]).ch('\n');
+    text.position(mesh.positions.data(), v, options.origin).ch('\n');
   }
   const size_t face_count = mesh.face_count();
   for (size_t f = 0; f < face_count; ++f) {

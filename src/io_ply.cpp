@@ -362,12 +362,11 @@ class PlyReader {
   }
 
   // A position value at byte `at`; non-finite values are errors.
-  float position_value(Type type, size_t at) const {
+  double position_value(Type type, size_t at) const {
     const double value = load_real(type, file_.begin() + at);
-    const float single = static_cast<float>(value);
     if (std::isnan(value) || std::isinf(value)) fail_byte(at, "NaN or infinite coordinate");
-    if (!std::isfinite(single)) fail_byte(at, "coordinate out of float range");
-    return single;
+    if (!std::isfinite(static_cast<float>(value))) fail_byte(at, "coordinate out of float range");
+    return value;
   }
 
   void read_binary_vertices(const Element& element) {
@@ -396,7 +395,7 @@ class PlyReader {
     }
     for (uint64_t i = 0; i < element.count; ++i) {
       const size_t start = pos_;
-      float xyz[3] = {0, 0, 0};
+      double xyz[3] = {0, 0, 0};
       for (const Property& property : element.properties) {
         if (property.is_list) {
           skip_list(property, start, element, i);
@@ -505,7 +504,7 @@ class PlyReader {
 
   void read_ascii_instance(TextCursor& c, const Element& element) {
     const uint64_t line = c.line;
-    float xyz[3] = {0, 0, 0};
+    double xyz[3] = {0, 0, 0};
     for (const Property& property : element.properties) {
       if (!property.is_list) {
         const std::string_view token = value_token(c, line, element);
@@ -513,8 +512,8 @@ class PlyReader {
           check_number(token, line);
           continue;
         }
-        float value = 0;
-        switch (parse_float(token, value)) {
+        double value = 0;
+        switch (parse_coordinate(token, value)) {
           case NumberStatus::ok:
             break;
           case NumberStatus::not_a_number:
@@ -591,7 +590,9 @@ void write_ply(OutputFile& out, const Mesh& mesh, const WriteOptions& options) {
   header += options.ascii ? "ascii 1.0\n" : "binary_little_endian 1.0\n";
   header += "comment written by meshcvt\n";
   header += "element vertex " + std::to_string(vertex_count) + "\n";
-  header += "property float x\nproperty float y\nproperty float z\n";
+  const bool doubles = !is_zero(options.origin);  // positions moved back to the file's frame
+  header += doubles ? "property double x\nproperty double y\nproperty double z\n"
+                    : "property float x\nproperty float y\nproperty float z\n";
   header += "element face " + std::to_string(face_count) + "\n";
   header += signed_indices ? "property list uchar int vertex_indices\n" : "property list uchar uint vertex_indices\n";
   if (labels) header += "property int cluster\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n";
@@ -601,8 +602,7 @@ void write_ply(OutputFile& out, const Mesh& mesh, const WriteOptions& options) {
   if (options.ascii) {
     TextWriter text(out);
     for (size_t v = 0; v < vertex_count; ++v) {
-      text.number(mesh.positions[3 * v]).ch(' ').number(mesh.positions[3 * v + 1]).ch(' ');
-      text.number(mesh.positions[3 * v + 2]).ch('\n');
+      text.position(mesh.positions.data(), v, options.origin).ch('\n');
     }
     for (size_t f = 0; f < face_count; ++f) {
       text.text("3 ").number(uint64_t(mesh.indices[3 * f])).ch(' ').number(uint64_t(mesh.indices[3 * f + 1]));
@@ -618,10 +618,15 @@ void write_ply(OutputFile& out, const Mesh& mesh, const WriteOptions& options) {
     }
     return;
   }
-  for (size_t v = 0; v < vertex_count; ++v) {
+  for (size_t v = 0; v < vertex_count && !doubles; ++v) {
     char* p = out.reserve(12);
     for (int axis = 0; axis < 3; ++axis) p = store<float>(p, mesh.positions[3 * v + axis]);
     out.advance(12);
+  }
+  for (size_t v = 0; v < vertex_count && doubles; ++v) {
+    char* p = out.reserve(24);
+    for (int axis = 0; axis < 3; ++axis) p = store<double>(p, options.origin[axis] + double(mesh.positions[3 * v + axis]));
+    out.advance(24);
   }
   const size_t face_bytes = 13 + (labels ? 7 : 0);
   for (size_t f = 0; f < face_count; ++f) {

@@ -11,7 +11,8 @@
 namespace meshcvt {
 
 void write_polygon_mesh(const std::string& path, const std::vector<float>& positions,
-                        const std::vector<uint32_t>& offsets, const std::vector<uint32_t>& vertices) {
+                        const std::vector<uint32_t>& offsets, const std::vector<uint32_t>& vertices,
+                        const std::array<double, 3>& origin) {
   const std::string ext = io::lower_extension(path);
   const bool obj = ext == ".obj";
   if (!obj && ext != ".off")
@@ -41,7 +42,7 @@ void write_polygon_mesh(const std::string& path, const std::vector<float>& posit
   }
   for (size_t v = 0; v < vertex_count; ++v) {
     if (obj) text.text("v ");
-    text.number(positions[3 * v]).ch(' ').number(positions[3 * v + 1]).ch(' ').number(positions[3 * v + 2]).ch('\n');
+    text.position(positions.data(), v, origin).ch('\n');
   }
   for (size_t p = 0; p + 1 < offsets.size(); ++p) {
     uint32_t size = offsets[p + 1] - offsets[p];

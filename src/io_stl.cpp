@@ -91,11 +91,13 @@ class AsciiStlReader {
     }
   }
 
-  float number(bool is_position) {
+  // A coordinate (is_position) to double, a normal's component checked only.
+  double number(bool is_position) {
     const std::string_view token = next();
     if (token.empty()) fail("file ends inside a facet");
-    float value = 0;
-    switch (parse_float(token, value)) {
+    double value = 0;
+    float ignored = 0;
+    switch (is_position ? parse_coordinate(token, value) : parse_float(token, ignored)) {
       case NumberStatus::ok:
         break;
       case NumberStatus::not_a_number:
@@ -188,7 +190,7 @@ ReadResult read_stl(const FileData& file) {
                                " triangles the binary STL header declares");
 }
 
-void write_stl(OutputFile& out, const Mesh& mesh) {
+void write_stl(OutputFile& out, const Mesh& mesh, const WriteOptions& options) {
   // The header must not start with "solid", or readers may take the file for ascii.
   char header[kHeaderBytes] = {};
   const char title[] = "binary STL written by meshcvt";
@@ -197,10 +199,16 @@ void write_stl(OutputFile& out, const Mesh& mesh) {
   std::memcpy(header + 80, &count, 4);
   if (!host_is_little_endian()) std::reverse(header + 80, header + 84);
   out.write(header, sizeof header);
+  const bool moved = !is_zero(options.origin);  // (-0.0 stays -0.0 when nothing moves)
   for (size_t f = 0; f < mesh.face_count(); ++f) {
-    float corner[3][3];
+    // The normal from the positions as held (near the origin when moved: more precise); the
+    // corners moved back by the origin and rounded to float, all binary STL can hold.
+    float corner[3][3], written[3][3];
     for (int k = 0; k < 3; ++k) {
-      for (int axis = 0; axis < 3; ++axis) corner[k][axis] = mesh.positions[3 * size_t(mesh.indices[3 * f + k]) + axis];
+      for (int axis = 0; axis < 3; ++axis) {
+        corner[k][axis] = mesh.positions[3 * size_t(mesh.indices[3 * f + k]) + axis];
+        written[k][axis] = moved ? static_cast<float>(options.origin[axis] + double(corner[k][axis])) : corner[k][axis];
+      }
     }
     const float u[3] = {corner[1][0] - corner[0][0], corner[1][1] - corner[0][1], corner[1][2] - corner[0][2]};
     const float v[3] = {corner[2][0] - corner[0][0], corner[2][1] - corner[0][1], corner[2][2] - corner[0][2]};
@@ -210,7 +218,7 @@ void write_stl(OutputFile& out, const Mesh& mesh) {
     char* p = out.reserve(kTriangleBytes);
     float values[12];
     std::memcpy(values, normal, 12);
-    std::memcpy(values + 3, corner, 36);
+    std::memcpy(values + 3, written, 36);
     for (int i = 0; i < 12; ++i) {
       std::memcpy(p + 4 * i, &values[i], 4);
       if (!host_is_little_endian()) std::reverse(p + 4 * i, p + 4 * i + 4);

@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -19,6 +21,7 @@
 
 #include "meshcvt/error.h"
 #include "meshcvt/io.h"
+#include "io_internal.h"
 
 namespace {
 
@@ -858,4 +861,219 @@ TEST_CASE("io: a failed write leaves no file behind") {
   std::ifstream in(dir.file("t.txt"));
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   CHECK(text == "second\n");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Meshes far from the origin (ReadOptions::shift_far, WriteOptions::origin)
+
+namespace {
+
+// The elephant of tests/data scaled to 100 units: the near mesh whose far copies the tests write.
+Mesh scaled_elephant() {
+  Mesh mesh = meshcvt::read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
+  for (float& x : mesh.positions) x *= 100;
+  return mesh;
+}
+
+std::string shortest(double x) {
+  char buf[32];
+  const std::to_chars_result r = std::to_chars(buf, buf + sizeof buf, x);
+  return std::string(buf, r.ptr);
+}
+
+// `mesh` moved by `shift` (each coordinate double(p) + shift, exactly as written) in FORMAT: "obj",
+// "off", "ply" (ascii), "plyd" (binary, double x y z), "stl" (ascii: every facet lists its corners).
+std::string far_file(const Mesh& mesh, const double shift[3], const std::string& format) {
+  auto coordinate = [&](size_t v, int k) { return double(mesh.positions[3 * v + k]) + shift[k]; };
+  auto line = [&](size_t v) {
+    return shortest(coordinate(v, 0)) + " " + shortest(coordinate(v, 1)) + " " + shortest(coordinate(v, 2));
+  };
+  std::string s;
+  const size_t nv = mesh.vertex_count(), nf = mesh.face_count();
+  if (format == "stl") {
+    s = "solid far\n";
+    for (size_t f = 0; f < nf; ++f) {
+      s += "facet normal 0 0 1\nouter loop\n";
+      for (int c = 0; c < 3; ++c) s += "vertex " + line(mesh.indices[3 * f + c]) + "\n";
+      s += "endloop\nendfacet\n";
+    }
+    return s + "endsolid far\n";
+  }
+  if (format == "plyd") {
+    Bytes b;
+    b.text("ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(nv) +
+           "\nproperty double x\nproperty double y\nproperty double z\nelement face " + std::to_string(nf) +
+           "\nproperty list uchar int vertex_indices\nend_header\n");
+    for (size_t v = 0; v < nv; ++v)
+      for (int k = 0; k < 3; ++k) b.put<double>(coordinate(v, k));
+    for (size_t f = 0; f < nf; ++f) {
+      b.put<uint8_t>(3);
+      for (int c = 0; c < 3; ++c) b.put<int32_t>(int32_t(mesh.indices[3 * f + c]));
+    }
+    return b.data;
+  }
+  if (format == "off") s = "OFF\n" + std::to_string(nv) + " " + std::to_string(nf) + " 0\n";
+  if (format == "ply")
+    s = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(nv) +
+        "\nproperty double x\nproperty double y\nproperty double z\nelement face " + std::to_string(nf) +
+        "\nproperty list uchar int vertex_indices\nend_header\n";
+  for (size_t v = 0; v < nv; ++v) s += (format == "obj" ? "v " : "") + line(v) + "\n";
+  for (size_t f = 0; f < nf; ++f) {
+    const uint32_t* t = &mesh.indices[3 * f];
+    if (format == "obj")
+      s += "f " + std::to_string(t[0] + 1) + " " + std::to_string(t[1] + 1) + " " + std::to_string(t[2] + 1) + "\n";
+    else
+      s += "3 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) + "\n";
+  }
+  return s;
+}
+
+// The largest difference between a coordinate of `read` (plus `origin`) and the same of `near`
+// plus `shift`, corner by corner of their triangles (STL numbers its vertices its own way), in
+// double.
+double largest_offset(const Mesh& read, const std::array<double, 3>& origin, const Mesh& near, const double shift[3]) {
+  REQUIRE(read.indices.size() == near.indices.size());
+  double worst = 0;
+  for (size_t i = 0; i < read.indices.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+      worst = std::max(worst, std::fabs((origin[k] + double(read.positions[3 * read.indices[i] + k])) -
+                                        (double(near.positions[3 * near.indices[i] + k]) + shift[k])));
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("io: a mesh far from the origin is moved near it as read, from doubles, and written back in place") {
+  TempDir dir;
+  const Mesh near = scaled_elephant();  // about 100 units across
+  // A georeferenced site in UTM metres: floats there are 0.25-0.5 apart.
+  const double utm[3] = {412345.0, 5312345.0, 231.5};
+  for (const std::string format : {"obj", "off", "ply", "plyd", "stl"}) {
+    CAPTURE(format);
+    const std::string path =
+        dir.write("far-" + format + (format == "plyd" ? ".ply" : "." + format), far_file(near, utm, format));
+    meshcvt::ReadOptions shifted;
+    shifted.shift_far = true;
+    ReadStats stats;
+    const Mesh mesh = meshcvt::read_mesh(path, shifted, &stats);
+    if (format != "stl") CHECK(mesh.indices == near.indices);  // (STL numbers vertices by first use)
+    // The origin is the box's centre rounded to a multiple of 100 (the extent is 100 and a hair):
+    // the moved positions are within about 100 of 0, where floats are 7.6e-6 apart.
+    CHECK(stats.extent >= 100);
+    CHECK(stats.extent < 101);
+    CHECK(stats.largest_coordinate > 5.3e6);
+    for (int k = 0; k < 3; ++k) {
+      CHECK(std::fmod(stats.origin[k], 100.0) == 0);
+      CHECK(std::fabs(stats.origin[k] - utm[k]) < 100);
+    }
+    CHECK(largest_offset(mesh, stats.origin, near, utm) < 4e-6);
+    // Unmoved, the same file keeps its coordinates only to the floats' 0.25-0.5 spacing up there.
+    ReadStats plain_stats;
+    const Mesh plain = meshcvt::read_mesh(path, {}, &plain_stats);
+    CHECK(plain_stats.origin == std::array<double, 3>{0, 0, 0});
+    CHECK(largest_offset(plain, plain_stats.origin, near, utm) > 0.1);
+    // A given origin is used as it is.
+    meshcvt::ReadOptions given;
+    given.origin = std::array<double, 3>{412000, 5312000, 0};
+    ReadStats given_stats;
+    const Mesh in_given = meshcvt::read_mesh(path, given, &given_stats);
+    CHECK(given_stats.origin == *given.origin);
+    CHECK(largest_offset(in_given, given_stats.origin, near, utm) < 4e-5);  // within ~500 of 0
+  }
+
+  // Written with its origin, the mesh is back in place: to the double, in every format but binary
+  // STL (floats: the format's own limit); read again it moves by the same origin.
+  ReadStats stats;
+  meshcvt::ReadOptions shifted;
+  shifted.shift_far = true;
+  const Mesh mesh = meshcvt::read_mesh(dir.write("far.off", far_file(near, utm, "off")), shifted, &stats);
+  meshcvt::WriteOptions back;
+  back.origin = stats.origin;
+  for (const char* name : {"b.obj", "b.off", "b.ply", "b-ascii.ply", "b.stl"}) {
+    CAPTURE(name);
+    back.ascii = std::string(name) == "b-ascii.ply";
+    meshcvt::write_mesh(dir.file(name), mesh, back);
+    ReadStats again_stats;
+    const Mesh again = meshcvt::read_mesh(dir.file(name), shifted, &again_stats);
+    CHECK(again_stats.origin == stats.origin);
+    if (std::string(name) == "b.stl") {
+      CHECK(again.face_count() == mesh.face_count());
+      CHECK(largest_offset(meshcvt::read_mesh(dir.file(name)), {0, 0, 0}, near, utm) < 0.5);
+      continue;
+    }
+    CHECK(again.indices == mesh.indices);
+    for (size_t i = 0; i < mesh.positions.size(); ++i)
+      CHECK(std::fabs(double(again.positions[i]) - double(mesh.positions[i])) <= 1e-9);
+  }
+  // A PLY written with an origin holds doubles.
+  std::ifstream ply(dir.file("b.ply"), std::ios::binary);
+  std::string header(200, '\0');
+  ply.read(header.data(), 200);
+  CHECK(contains(header, "property double x\nproperty double y\nproperty double z\n"));
+}
+
+TEST_CASE("io: a mesh near the origin reads the same floats whether or not far meshes move") {
+  TempDir dir;
+  const Mesh near = scaled_elephant();
+  const double none[3] = {0, 0, 0}, close[3] = {40, -20, 7};  // float spacing 4e-6 of 100: not far
+  for (const double* shift : {none, close})
+    for (const std::string format : {"obj", "off", "ply", "plyd", "stl"}) {
+      CAPTURE(format);
+      const std::string path = dir.write("m-" + format + (format == "plyd" ? ".ply" : "." + format),
+                                         far_file(near, shift, format));
+      meshcvt::ReadOptions shifted;
+      shifted.shift_far = true;
+      ReadStats stats;
+      const Mesh a = meshcvt::read_mesh(path, shifted, &stats), b = meshcvt::read_mesh(path);
+      CHECK(stats.origin == std::array<double, 3>{0, 0, 0});
+      CHECK(same_bits(a.positions, b.positions));
+      CHECK(a.indices == b.indices);
+    }
+}
+
+TEST_CASE("io: coordinates read to double round to the floats parse_float gives") {
+  using meshcvt::io::NumberStatus;
+  // Decimals a hair off the midpoint between two floats: the nearest double is the midpoint
+  // itself, and rounding it to float (ties to even) would go the wrong way for two of them.
+  const char* tokens[] = {
+      "1.0000000596046447753906250001",   // above 1 + 2^-24: 1 + 2^-23 (even rounding says 1)
+      "1.0000000596046447753906249999",   // below: 1
+      "1.000000059604644775390625",       // the midpoint: ties to even, 1
+      "1.0000001788139343261718749999",   // below 1 + 3 * 2^-24: 1 + 2^-23 (even rounding says 1 + 2^-22)
+      "-1.0000001788139343261718750001",  // above in magnitude: -(1 + 2^-22)
+      "412345.03125000000000000000001",
+      "0", "-0", "+2.5", "1e-40", "-1e-45", "3.4028235e38", "1e-400"};
+  for (const char* token : tokens) {
+    CAPTURE(token);
+    float single = 0;
+    double value = 0;
+    REQUIRE(meshcvt::io::parse_float(token, single) == NumberStatus::ok);
+    REQUIRE(meshcvt::io::parse_coordinate(token, value) == NumberStatus::ok);
+    const float rounded = static_cast<float>(value);
+    CHECK(std::memcmp(&rounded, &single, sizeof(float)) == 0);
+  }
+  // Many random decimals of 9 to 20 digits agree too.
+  uint64_t state = 7;
+  auto next = [&] { return state = state * 6364136223846793005ull + 1442695040888963407ull; };
+  for (int i = 0; i < 200000; ++i) {
+    std::string token = (next() >> 63) ? "-" : "";
+    const int digits = 9 + int((next() >> 33) % 12), dot = 1 + int((next() >> 40) % 7);
+    for (int d = 0; d < digits; ++d) {
+      if (d == dot) token += '.';
+      token += char('0' + (next() >> 33) % 10);
+    }
+    token += 'e';
+    token += std::to_string(int((next() >> 33) % 56) - 30);
+    float single = 0;
+    double value = 0;
+    REQUIRE(meshcvt::io::parse_float(token, single) == NumberStatus::ok);
+    REQUIRE(meshcvt::io::parse_coordinate(token, value) == NumberStatus::ok);
+    CHECK(static_cast<float>(value) == single);
+  }
+  // The same refusals.
+  double value = 0;
+  CHECK(meshcvt::io::parse_coordinate("1e39", value) == NumberStatus::out_of_range);
+  CHECK(meshcvt::io::parse_coordinate("nan", value) == NumberStatus::not_finite);
+  CHECK(meshcvt::io::parse_coordinate("1.5x", value) == NumberStatus::not_a_number);
+  CHECK(meshcvt::io::parse_coordinate("+-1", value) == NumberStatus::not_a_number);
 }

@@ -25,6 +25,7 @@
 // components; boundary loops of the input stay boundary loops.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -260,11 +261,13 @@ double l21_distortion(const Mesh& mesh, const std::vector<uint32_t>& labels, uin
 
 /// Writes a polygon mesh (faces of any size >= 3) as OBJ or OFF, by the extension of `path`
 /// (any case): positions 3 floats per vertex; polygon p is vertices[offsets[p] .. offsets[p+1]),
-/// empty polygons are skipped. Written to a temporary file and renamed (no partial file on
+/// empty polygons are skipped; `origin` is added to every position as it is written (as
+/// WriteOptions::origin in write_mesh). Written to a temporary file and renamed (no partial file on
 /// failure). Throws FileError for another extension or an I/O failure, OptionError for indices out
 /// of range or polygons of 1 or 2 vertices.
 void write_polygon_mesh(const std::string& path, const std::vector<float>& positions,
-                        const std::vector<uint32_t>& offsets, const std::vector<uint32_t>& vertices);
+                        const std::vector<uint32_t>& offsets, const std::vector<uint32_t>& vertices,
+                        const std::array<double, 3>& origin = {0, 0, 0});
 
 /// "paper" / "cgal"; parse_chord_rule throws OptionError naming the accepted values.
 ChordRule parse_chord_rule(const std::string& s);
