@@ -152,8 +152,10 @@ void run_approximate(ApproximateArgs& a) {
   auto t0 = Clock::now();
   WriteOptions wo;
   wo.face_labels = &s.triangle_regions;
+  wo.origin = input.stats.origin;
   write_mesh(a.output, s.mesh, wo);
-  if (!a.polygons.empty()) write_polygon_mesh(a.polygons, s.mesh.positions, s.polygon_offsets, s.polygon_vertices);
+  if (!a.polygons.empty())
+    write_polygon_mesh(a.polygons, s.mesh.positions, s.polygon_offsets, s.polygon_vertices, input.stats.origin);
   if (!a.partition.empty() || !a.labels.empty()) {
     const std::vector<uint32_t> labels = to_input_order(s.labels, order);
     if (!a.labels.empty()) write_text_file(a.labels, labels_text(labels));
@@ -162,6 +164,7 @@ void run_approximate(ApproximateArgs& a) {
       restore_input_order(original, order);
       WriteOptions po;
       po.face_labels = &labels;
+      po.origin = input.stats.origin;
       write_mesh(a.partition, original, po);
     }
   }

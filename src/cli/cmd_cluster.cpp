@@ -110,6 +110,7 @@ void run_cluster(const ClusterArgs& a) {
   auto t0 = Clock::now();
   WriteOptions wo;
   wo.face_labels = &c.labels;
+  wo.origin = input.stats.origin;
   write_mesh(a.output, mesh, wo);
   if (!a.labels.empty()) write_text_file(a.labels, labels_text(c.labels));
   double write_s = std::chrono::duration<double>(Clock::now() - t0).count();

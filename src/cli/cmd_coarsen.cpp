@@ -140,7 +140,8 @@ void run_coarsen(const CoarsenArgs& a) {
   auto t0 = Clock::now();
   ReadOptions ro;
   ro.weld = !a.no_weld;
-  Mesh input = read_mesh_noted(a.input, ro, a.quiet);
+  ReadStats read_stats;
+  Mesh input = read_mesh_noted(a.input, ro, a.quiet, &read_stats);
   double read_s = seconds(t0);
   // Faces with a repeated corner are counted here (coarsen_surface leaves them out), so that the
   // messages about them name the file.
@@ -240,13 +241,16 @@ void run_coarsen(const CoarsenArgs& a) {
     std::fprintf(stderr, "meshcvt: warning: %zu defects remain (%s): the output is not a valid manifold\n",
                  r.defects.size(), count_kinds(r.defects).c_str());
   t0 = Clock::now();
-  write_mesh(a.output, r.mesh);
+  WriteOptions wo;
+  wo.origin = read_stats.origin;
+  write_mesh(a.output, r.mesh, wo);
   if (per_input_face) {
     const std::vector<uint32_t> clusters = input_face_clusters(input, result);
     if (!a.labels.empty()) write_text_file(a.labels, labels_text(clusters));
     if (!a.partition.empty()) {
       WriteOptions po;
       po.face_labels = &clusters;
+      po.origin = read_stats.origin;
       write_mesh(a.partition, input, po);
     }
   }

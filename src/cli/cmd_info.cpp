@@ -1,7 +1,10 @@
 // meshcvt CLI: `meshcvt info` — reads a mesh and prints its counts, topology (components, boundary
 // loops, non-manifold and degenerate elements, Euler characteristic, genus), bounding box, area,
 // what reading did, and how long reading and building the topology took.
+#include <algorithm>
+#include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -31,9 +34,28 @@ const char* genus_undefined_reason(const MeshInfo& i) {
 void row(const char* name, const std::string& value) { std::printf("%-24s %s\n", name, value.c_str()); }
 void row(const char* name, uint64_t value) { row(name, std::to_string(value)); }
 
-std::string xyz(const float p[3]) {
-  char buf[128];
-  std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g", double(p[0]), double(p[1]), double(p[2]));
+// A corner of the box in the file's frame: the mesh's float corner plus the origin it was moved by
+// (zero unless it is far from it; then %.17g shows the sum's digits).
+std::array<double, 3> in_file_frame(const float p[3], const ReadStats& rs) {
+  return {rs.origin[0] + double(p[0]), rs.origin[1] + double(p[1]), rs.origin[2] + double(p[2])};
+}
+
+bool moved(const ReadStats& rs) { return rs.origin[0] != 0 || rs.origin[1] != 0 || rs.origin[2] != 0; }
+
+// The corner in the file's frame. A moved mesh's corner is shown to the float spacing of the
+// moved box's largest coordinate (digits below it are the rounding of the moved floats, not data).
+std::string xyz(const float p[3], const MeshInfo& i, const ReadStats& rs) {
+  char buf[160];
+  const std::array<double, 3> q = in_file_frame(p, rs);
+  if (!moved(rs)) {
+    std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g", q[0], q[1], q[2]);
+    return buf;
+  }
+  float largest = 0;
+  for (int k = 0; k < 3; ++k) largest = std::max({largest, std::fabs(i.bbox_min[k]), std::fabs(i.bbox_max[k])});
+  const double spacing = double(std::nextafter(largest, INFINITY)) - double(largest);
+  const int decimals = std::clamp(int(-std::floor(std::log10(spacing))), 0, 17);
+  std::snprintf(buf, sizeof buf, "%.*f %.*f %.*f", decimals, q[0], decimals, q[1], decimals, q[2]);
   return buf;
 }
 
@@ -62,8 +84,14 @@ void print_text(const InfoArgs& a, const ReadStats& rs, const MeshInfo& i, doubl
                                " non-orientable components)");
   row("euler characteristic", std::to_string(i.euler_characteristic));
   row("genus", i.genus >= 0 ? std::to_string(i.genus) : std::string("undefined (") + genus_undefined_reason(i) + ")");
-  row("bbox min", xyz(i.bbox_min));
-  row("bbox max", xyz(i.bbox_max));
+  row("bbox min", xyz(i.bbox_min, i, rs));
+  row("bbox max", xyz(i.bbox_max, i, rs));
+  if (moved(rs)) {
+    char origin[128];
+    std::snprintf(origin, sizeof origin, "%.17g %.17g %.17g (far from 0: moved near it as read)", rs.origin[0],
+                  rs.origin[1], rs.origin[2]);
+    row("read origin", origin);
+  }
   char area[64];
   std::snprintf(area, sizeof area, "%.10g", i.total_area);
   row("total area", area);
@@ -91,8 +119,15 @@ void print_json(const InfoArgs& a, const ReadStats& rs, const MeshInfo& i, doubl
   j.value("orientation_flips", i.orientation_flips).value("nonorientable_components", i.nonorientable_components);
   j.value("euler_characteristic", i.euler_characteristic);
   j.value("genus", i.genus);  // -1: not defined (see MeshInfo::genus)
-  j.begin_array("bbox_min").item(i.bbox_min[0]).item(i.bbox_min[1]).item(i.bbox_min[2]).end_array();
-  j.begin_array("bbox_max").item(i.bbox_max[0]).item(i.bbox_max[1]).item(i.bbox_max[2]).end_array();
+  const std::array<double, 3> lo = in_file_frame(i.bbox_min, rs), hi = in_file_frame(i.bbox_max, rs);
+  if (moved(rs)) {
+    j.begin_array("bbox_min").exact({}, lo[0]).exact({}, lo[1]).exact({}, lo[2]).end_array();
+    j.begin_array("bbox_max").exact({}, hi[0]).exact({}, hi[1]).exact({}, hi[2]).end_array();
+  } else {  // the floats as they were, to their digits
+    j.begin_array("bbox_min").item(i.bbox_min[0]).item(i.bbox_min[1]).item(i.bbox_min[2]).end_array();
+    j.begin_array("bbox_max").item(i.bbox_max[0]).item(i.bbox_max[1]).item(i.bbox_max[2]).end_array();
+  }
+  j.begin_array("origin").exact({}, rs.origin[0]).exact({}, rs.origin[1]).exact({}, rs.origin[2]).end_array();
   j.value("total_area", i.total_area);
   j.begin_object("read")
       .value("format", rs.format)

@@ -42,10 +42,14 @@ void run_stats(const StatsArgs& a) {
   using Clock = std::chrono::steady_clock;
   ReadOptions ro;
   ro.weld = !a.no_weld;
-  Mesh mesh = read_mesh_noted(a.input, ro, false);
-  // Read the reference before any measuring, so a bad --ref fails fast.
+  ReadStats read_stats;
+  Mesh mesh = read_mesh_noted(a.input, ro, false, &read_stats);
+  // Read the reference before any measuring, so a bad --ref fails fast; in the mesh's frame (moved
+  // by the same origin when the mesh is far from 0), so that distances compare the same places.
   Mesh ref;
-  if (!a.ref.empty()) ref = read_mesh_noted(a.ref, ro, false);
+  ReadOptions ref_options = ro;
+  ref_options.origin = read_stats.origin;
+  if (!a.ref.empty()) ref = read_mesh_noted(a.ref, ref_options, false);
 
   TriangleQuality q = triangle_quality(mesh);
   ApproximationError e;

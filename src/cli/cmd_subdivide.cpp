@@ -25,13 +25,16 @@ void run_subdivide(const SubdivideArgs& a) {
   ReadOptions ro;
   ro.weld = !a.no_weld;
   auto t0 = Clock::now();
-  Mesh mesh = read_mesh_noted(a.input, ro, a.quiet);
+  ReadStats read_stats;
+  Mesh mesh = read_mesh_noted(a.input, ro, a.quiet, &read_stats);
   double read_s = seconds_since(t0);
   t0 = Clock::now();
   Mesh fine = subdivide_midpoint(mesh, a.levels);
   double subdivide_s = seconds_since(t0);
   t0 = Clock::now();
-  write_mesh(a.output, fine);
+  WriteOptions wo;
+  wo.origin = read_stats.origin;
+  write_mesh(a.output, fine, wo);
   double write_s = seconds_since(t0);
   if (!a.quiet)
     std::printf("%s: %zu faces -> %zu faces, %zu vertices (%u levels); wrote %s (read %.3f s, subdivide %.3f s, "

@@ -36,8 +36,9 @@ void print_progress(const ClusterProgress& progress);
 /// stays that of the largest phase. Call before reading the input. read_input() calls it.
 void prepare_allocator(const std::string& input_path);
 
-/// read_mesh, plus a note on stderr (unless quiet) about what the reader skipped: PLY header lines
-/// that are no keyword. `stats` may be null.
+/// read_mesh with ReadOptions::shift_far on, plus notes on stderr (unless quiet): a mesh that was
+/// moved near the origin (ReadStats::origin: outputs must add it back, WriteOptions::origin), PLY
+/// header lines that are no keyword skipped. `stats` may be null.
 Mesh read_mesh_noted(const std::string& path, const ReadOptions& options, bool quiet, ReadStats* stats = nullptr);
 
 /// The input of a partitioning command: read (weld: merge duplicate vertices; read_mesh_noted),

@@ -2,6 +2,7 @@
 // strings), so the CLI needs no JSON library for output alone.
 #pragma once
 
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -31,6 +32,15 @@ class Json {
     return *this;
   }
   Json& value(std::string_view key, float f) { return value(key, double(f)); }
+  /// Every digit that tells the double apart (the shortest decimal that reads back as d), where 9
+  /// significant digits are too few: coordinates in a far mesh's frame.
+  Json& exact(std::string_view key, double d) {
+    prefix(key);
+    if (!std::isfinite(d)) { out_ += "null"; return *this; }
+    char buf[32];
+    out_.append(buf, std::to_chars(buf, buf + sizeof buf, d).ptr);
+    return *this;
+  }
   template <typename I>
     requires std::is_integral_v<I>
   Json& value(std::string_view key, I i) {

@@ -65,42 +65,18 @@ void prepare_allocator(const std::string& input_path) {
 #endif
 }
 
-namespace {
-// Positions are 32-bit floats, which keep a coordinate to about 2^-24 of its magnitude: a mesh far
-// from the origin for its size (a georeferenced scan in UTM metres: 4e6 for a site of 100 m) was
-// rounded to a coarse grid as it was read, and everything after works on that grid (the elephant
-// of tests/data scaled to 100 units and moved to (1e5, 4e5): smallest angle out 30.25 -> 22.35
-// degrees). Said once, at read: the rest cannot tell. A spacing of 1e-5 of the size is what a
-// mesh placed a few hundred of its sizes away gets; none of the libcgal-demo meshes comes near.
-constexpr double kFarSpacing = 1e-5;
-
-void note_far_coordinates(const std::string& path, const Mesh& mesh) {
-  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (size_t v = 0; v < mesh.vertex_count(); ++v)
-    for (int c = 0; c < 3; ++c) {
-      lo[c] = std::min(lo[c], double(mesh.positions[3 * v + c]));
-      hi[c] = std::max(hi[c], double(mesh.positions[3 * v + c]));
-    }
-  double size = 0, farthest = 0;
-  for (int c = 0; c < 3; ++c) {
-    size = std::max(size, hi[c] - lo[c]);
-    farthest = std::max({farthest, std::fabs(lo[c]), std::fabs(hi[c])});
-  }
-  if (!(size > 0) || !std::isfinite(farthest)) return;
-  const float f = float(farthest);
-  const double spacing = double(std::nextafter(f, INFINITY)) - double(f);
-  if (spacing > kFarSpacing * size)
-    std::fprintf(stderr,
-                 "meshcvt: note: %s: coordinates reach %.3g while the mesh spans %.3g: as 32-bit floats they are "
-                 "kept to %.3g (%.2g%% of the span); move the mesh near the origin for full precision\n",
-                 path.c_str(), farthest, size, spacing, 100 * spacing / size);
-}
-}  // namespace
-
 Mesh read_mesh_noted(const std::string& path, const ReadOptions& options, bool quiet, ReadStats* stats) {
   ReadStats local;
-  Mesh mesh = read_mesh(path, options, &local);
-  if (!quiet) note_far_coordinates(path, mesh);
+  // A mesh far from the origin for its size (a georeferenced scan) is moved near it as it is read,
+  // so that 32-bit floats keep its shape; outputs are moved back (output_options).
+  ReadOptions moved = options;
+  moved.shift_far = true;
+  Mesh mesh = read_mesh(path, moved, &local);
+  if (!quiet && !options.origin && !(local.origin[0] == 0 && local.origin[1] == 0 && local.origin[2] == 0))
+    std::fprintf(stderr,
+                 "meshcvt: note: %s: coordinates reach %.6g while the mesh spans %.3g: held relative to "
+                 "(%.17g, %.17g, %.17g) to keep their precision as 32-bit floats; outputs are written back in place\n",
+                 path.c_str(), local.largest_coordinate, local.extent, local.origin[0], local.origin[1], local.origin[2]);
   if (local.skipped_header_lines > 0 && !quiet)
     std::fprintf(stderr, "meshcvt: note: %s: skipped %llu PLY header line%s that begin%s with no PLY keyword (line %llu%s)\n",
                  path.c_str(), (unsigned long long)local.skipped_header_lines, local.skipped_header_lines > 1 ? "s" : "",

@@ -170,14 +170,15 @@ set -e
 grep -q "^meshcvt: error: .*no-such-mesh.off" "$tmp/err" || fail "missing file: message: $(cat "$tmp/err")"
 [ ! -s "$tmp/out" ] || fail "missing file: something on stdout"
 
-# ---- coordinates far from the origin for the mesh's size: a note says how coarsely 32-bit floats
-# keep them (the elephant, about 1 across, moved to x = 4e3: spacing 2.4e-4 > 1e-5 of its size;
-# at x = 40 the spacing is 3.8e-6, well within, and nothing is said)
+# ---- coordinates far from the origin for the mesh's size: the mesh is held relative to a point
+# near it, and a note says which (the elephant, about 1 across, moved to x = 4e3: float spacing
+# 2.4e-4 > 1e-5 of its size; at x = 40 the spacing is 3.8e-6, well within, and nothing is said;
+# tests/cli/far_coordinates.sh has the rest)
 for shift in 4000 40; do
   off_mapped "$data/elephant.off" "$tmp/far.off" "x + $shift" y z
   "$cli" info "$tmp/far.off" >"$tmp/out" 2>"$tmp/err"
   if [ "$shift" = 4000 ]; then
-    grep -q "^meshcvt: note: .*far.off: coordinates reach 4e+03 while the mesh spans 1: as 32-bit floats they are kept to 0.000244 (0.024% of the span)" "$tmp/err" ||
+    grep -q "^meshcvt: note: .*far.off: coordinates reach 4000.36 while the mesh spans 1: held relative to (4000, 0, 0) to keep their precision as 32-bit floats" "$tmp/err" ||
       fail "far coordinates: no note: $(cat "$tmp/err")"
   else
     [ ! -s "$tmp/err" ] || fail "coordinates near the origin: unexpected note: $(cat "$tmp/err")"
