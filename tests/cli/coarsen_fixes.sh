@@ -81,6 +81,7 @@ assert r['defects'] == [] and r['component_clusters'] == [n]
 assert r['output']['vertices'] == n and r['output']['euler_characteristic'] == -4
 assert r['output']['nonmanifold_edges'] == 0 and r['output']['nonmanifold_vertices'] == 0
 assert r['timings_s']['fix'] >= 0
+assert r['timings_s']['error'] == 0 and 'error' not in r  # --no-error: nothing measured
 PY
 done
 

@@ -64,6 +64,7 @@ qf, qn = far["quality"], near["quality"]
 assert qf["min_angle_deg"] > 29 and qf["angles_below_30"] == 0, qf
 assert abs(qf["q_avg"] - qn["q_avg"]) < 0.01, (qf, qn)
 assert abs(far["error"]["hausdorff_rel"] - near["error"]["hausdorff_rel"]) < 0.01, (far["error"], near["error"])
+assert far["timings_s"]["error"] > 0  # the measurement's own time
 PY
 read_vertices "$tmp/c-utm.ply" >"$tmp/c-utm.xyz"
 python3 - "$tmp/c-utm.xyz" <<'PY' || fail "coarsen: output vertices not in place"
