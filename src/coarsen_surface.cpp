@@ -389,7 +389,13 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
       face_limit.resize(mesh.face_count());
       for (size_t f = 0; f < mesh.face_count(); ++f) face_limit[f] = limit_of(density, f);
     }
-    SplitEdgesResult split = split_long_edges(mesh, result.coarse_edge_length / ratio, face_limit);
+    // auto: not where the split would run away (slivers: see kAutoSplitMaxGrowth).
+    const double at_least = split_long_edges_min_faces(mesh, result.coarse_edge_length / ratio, face_limit);
+    const bool runaway =
+        auto_split && at_least > kAutoSplitMaxGrowth * double(std::max<size_t>(n, mesh.face_count()));
+    if (runaway) result.split_refused_faces = at_least;
+    SplitEdgesResult split;
+    if (!runaway) split = split_long_edges(mesh, result.coarse_edge_length / ratio, face_limit);
     if (split.split_edges > 0) {
       result.split_ratio = ratio;
       result.split_edges = split.split_edges;

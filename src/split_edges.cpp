@@ -100,7 +100,7 @@ bool collapsed(const uint32_t* v) { return v[0] == v[1] || v[1] == v[2] || v[0] 
 
 }  // namespace
 
-SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std::vector<double>& face_max_length) {
+double split_long_edges_min_faces(const Mesh& mesh, double max_length, const std::vector<double>& face_max_length) {
   const size_t nv = mesh.vertex_count(), nf = mesh.face_count();
   if (mesh.indices.size() % 3 != 0 || mesh.positions.size() % 3 != 0)
     throw OptionError("split_long_edges: mesh arrays are not whole triangles / vertices");
@@ -123,9 +123,8 @@ SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std
   else
     for (double l : face_max_length) check_limit(l);
 
-  // At least this many faces come out: a triangle with edges within l has at most (sqrt 3 / 4) l^2 of
-  // area, and an edge of length L ends in at least L / l pieces (each in a face, shared by at most
-  // two). A request far beyond 32-bit indices is refused before any work.
+  // A triangle with edges within l has at most (sqrt 3 / 4) l^2 of area, and an edge of length L
+  // ends in at least L / l pieces (each in a face, shared by at most two).
   double area_bound = 0, edge_bound = 0;
   for (size_t f = 0; f < nf; ++f) {
     const uint32_t* t = &mesh.indices[3 * f];
@@ -133,10 +132,16 @@ SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std
     area_bound += face_area(mesh, f) / (std::sqrt(3.0) / 4 * l * l);
     for (int k = 0; k < 3; ++k) edge_bound += 0.5 * std::sqrt(length2(mesh.positions, t[k], t[(k + 1) % 3])) / l;
   }
-  if (!(std::max(area_bound, edge_bound) <= double(kMaxFaces)))
+  return std::max(area_bound, edge_bound);
+}
+
+SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std::vector<double>& face_max_length) {
+  const size_t nf = mesh.face_count();
+  // A request far beyond 32-bit indices is refused before any work (the inputs are checked there).
+  const double at_least = split_long_edges_min_faces(mesh, max_length, face_max_length);
+  if (!(at_least <= double(kMaxFaces)))
     throw OptionError("split_long_edges: the limit would make more than " + std::to_string(kMaxFaces) +
-                      " faces (at least " + std::to_string(uint64_t(std::min(std::max(area_bound, edge_bound), 1e19))) +
-                      ")");
+                      " faces (at least " + std::to_string(uint64_t(std::min(at_least, 1e19))) + ")");
 
   SplitEdgesResult out;
   out.mesh.positions = mesh.positions;

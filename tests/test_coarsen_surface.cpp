@@ -129,6 +129,7 @@ TEST_CASE("coarsen_surface: a CAD-like cylinder's long edges are split first, an
   CHECK(plain.surface.face_count() == cylinder.face_count());
   CHECK(split.split_ratio == kAutoSplitEdgesRatio);
   CHECK(split.split_edges > 0);
+  CHECK(split.split_refused_faces == 0);  // far from a runaway (kAutoSplitMaxGrowth)
   CHECK_FALSE(split.split_discarded);
   CHECK(split.discarded_job_defects == -1);  // one job: the split one was valid
   CHECK(split.jobs.empty());
@@ -149,6 +150,27 @@ TEST_CASE("coarsen_surface: a CAD-like cylinder's long edges are split first, an
   CHECK(finer.split_ratio == 3);
   CHECK(finer.surface.face_count() > split.surface.face_count());
   CHECK(longest_edge(finer.surface) <= finer.coarse_edge_length / 3 * (1 + 1e-6));
+}
+
+TEST_CASE("coarsen_surface: auto leaves the long edges of slivers as they are instead of running away") {
+  // Ten faces 0.2 long and 1e-7 wide: their area makes the coarse edge 1.7e-4 long, so splitting
+  // would make tens of thousands of faces (the libcgal-demo case it stands for: gigabytes).
+  const Mesh needle = strip(5, 0.2, 1e-7);
+  const uint32_t n = 4;
+  const CoarsenSurfaceResult r = coarsen_surface(needle, with_n(n));
+  CHECK(r.long_edges == 10);
+  const double at_least = split_long_edges_min_faces(needle, r.coarse_edge_length / kAutoSplitEdgesRatio);
+  CHECK(at_least > kAutoSplitMaxGrowth * double(needle.face_count()));
+  CHECK(r.split_refused_faces == at_least);
+  CHECK(r.split_edges == 0);
+  CHECK(r.split_ratio == 0);
+  CHECK(r.surface.face_count() == needle.face_count());
+  CHECK(r.job.coarse.mesh.vertex_count() == n);
+  // A strip as wide as it is long is no runaway: split as before.
+  const Mesh wide = strip(5, 0.2, 3);
+  const CoarsenSurfaceResult w = coarsen_surface(wide, with_n(n));
+  CHECK(w.split_refused_faces == 0);
+  CHECK(w.split_edges > 0);
 }
 
 TEST_CASE("coarsen_surface: a mesh without long edges is coarsened as given, as coarsen_mesh would") {

@@ -113,6 +113,10 @@ TEST_CASE("split_long_edges: a long sheet ends with no edge above the limit, its
     CHECK(s.rounds > 0);
     CHECK(s.split_edges > 0);
     CHECK(s.mesh.face_count() > m.face_count());
+    // The bound known before the work is one.
+    const double at_least = meshcvt::split_long_edges_min_faces(m, limit);
+    CHECK(at_least > 0.5 * m.face_count());
+    CHECK(double(s.mesh.face_count()) >= at_least);
     // Longest-edge bisection: no angle smaller than half the input's smallest.
     CHECK(meshcvt::triangle_quality(s.mesh).min_angle_deg >= 0.5 * meshcvt::triangle_quality(m).min_angle_deg);
     // Input vertices keep their ids and positions.

@@ -182,6 +182,12 @@ void run_coarsen(const CoarsenArgs& a) {
                  "meshcvt: note: %s: %llu edges are longer than the coarse mesh's edges (%.4g): faces that long "
                  "make thin clusters and thin triangles; --split-edges auto (the default) splits them first\n",
                  a.input.c_str(), (unsigned long long)result.long_edges, result.coarse_edge_length);
+  if (result.split_refused_faces > 0 && !a.quiet)
+    std::fprintf(stderr,
+                 "meshcvt: note: %s: %llu edges are longer than the coarse mesh's edges (%.4g), but splitting them "
+                 "would make at least %.3g faces (slivers: long edges, little area): left as they are\n",
+                 a.input.c_str(), (unsigned long long)result.long_edges, result.coarse_edge_length,
+                 result.split_refused_faces);
   if (result.split_discarded && !a.quiet)
     std::fprintf(stderr,
                  "meshcvt: note: %s: with its long edges split the coarse mesh kept %zu defects, as given %zu: "
@@ -279,6 +285,7 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("coarse_edge_length", result.coarse_edge_length).value("long_edges", result.long_edges)
         .value("split_edges_option", a.split_edges).value("split_edges_ratio", result.split_ratio)
         .value("split_edges", result.split_edges).value("split_discarded", result.split_discarded)
+        .value("split_refused_faces", result.split_refused_faces)
         .value("discarded_job_defects", result.discarded_job_defects)
         .value("unsplit_components", result.unsplit_components)
         .value("retried_subdivided", result.retried_subdivided)

@@ -96,6 +96,13 @@ struct SplitEdgesResult {
 /// beyond 32-bit indices.
 SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std::vector<double>& face_max_length = {});
 
+/// A lower bound on the faces split_long_edges(mesh, max_length, face_max_length) makes, before
+/// any work: no face within a limit l holds more than (sqrt 3 / 4) l^2 of area, and an edge of
+/// length L ends in at least L / l pieces, each in a face shared by at most two. The guard
+/// split_long_edges itself applies (beyond 32-bit indices: refused). Cost O(F); the same checks of
+/// its inputs as split_long_edges.
+double split_long_edges_min_faces(const Mesh& mesh, double max_length, const std::vector<double>& face_max_length = {});
+
 /// The edge length of a coarse mesh of `clusters` vertices made of equilateral triangles, closed,
 /// where the density is `density`, when its clusters are those of an optimal CVT of the surface:
 /// cells of area (S / clusters) density^-1/2 (Gersho's law: area ~ rho^-1/2), so the length is
