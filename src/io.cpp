@@ -140,14 +140,21 @@ static bool decimal_magnitude_below_one(std::string_view token) {
   return exponent10 < 0;
 }
 
+// Moves p past a leading '+', which from_chars refuses; false for an empty token or a sign with no
+// number after it.
+static bool skip_plus(const char*& p, const char* end) {
+  if (p == end) return false;
+  if (*p == '+') {
+    ++p;
+    if (p == end || *p == '+' || *p == '-') return false;
+  }
+  return true;
+}
+
 NumberStatus parse_float(std::string_view token, float& value) {
   const char* p = token.data();
   const char* end = p + token.size();
-  if (p == end) return NumberStatus::not_a_number;
-  if (*p == '+') {
-    ++p;  // from_chars refuses a plus sign
-    if (p == end || *p == '+' || *p == '-') return NumberStatus::not_a_number;
-  }
+  if (!skip_plus(p, end)) return NumberStatus::not_a_number;
   float parsed = 0;
   const std::from_chars_result result = std::from_chars(p, end, parsed, std::chars_format::general);
   if (result.ptr != end || result.ec == std::errc::invalid_argument) {
@@ -169,11 +176,7 @@ NumberStatus parse_float(std::string_view token, float& value) {
 NumberStatus parse_coordinate(std::string_view token, double& value) {
   const char* p = token.data();
   const char* end = p + token.size();
-  if (p == end) return NumberStatus::not_a_number;
-  if (*p == '+') {
-    ++p;
-    if (p == end || *p == '+' || *p == '-') return NumberStatus::not_a_number;
-  }
+  if (!skip_plus(p, end)) return NumberStatus::not_a_number;
   double parsed = 0;
   const std::from_chars_result result = std::from_chars(p, end, parsed, std::chars_format::general);
   if (result.ptr != end || result.ec == std::errc::invalid_argument) return NumberStatus::not_a_number;
@@ -204,11 +207,7 @@ NumberStatus parse_coordinate(std::string_view token, double& value) {
 NumberStatus parse_int(std::string_view token, int64_t& value) {
   const char* p = token.data();
   const char* end = p + token.size();
-  if (p == end) return NumberStatus::not_a_number;
-  if (*p == '+') {
-    ++p;
-    if (p == end || *p == '-') return NumberStatus::not_a_number;
-  }
+  if (!skip_plus(p, end)) return NumberStatus::not_a_number;
   const std::from_chars_result result = std::from_chars(p, end, value);
   if (result.ptr != end || result.ec == std::errc::invalid_argument) return NumberStatus::not_a_number;
   if (result.ec == std::errc::result_out_of_range) return NumberStatus::out_of_range;
