@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <utility>
@@ -24,6 +25,13 @@
 namespace meshcvt {
 
 namespace {
+
+// A number in a message, as %.4g writes it.
+std::string format_number(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", x);
+  return buf;
+}
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
@@ -389,10 +397,16 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
       face_limit.resize(mesh.face_count());
       for (size_t f = 0; f < mesh.face_count(); ++f) face_limit[f] = limit_of(density, f);
     }
-    // auto: not where the split would run away (slivers: see kAutoSplitMaxGrowth).
+    // Not where the split would run away (slivers: see kAutoSplitMaxGrowth): auto leaves the edges
+    // as they are, an explicit ratio is refused (it would take minutes and gigabytes).
     const double at_least = split_long_edges_min_faces(mesh, result.coarse_edge_length / ratio, face_limit);
-    const bool runaway =
-        auto_split && at_least > kAutoSplitMaxGrowth * double(std::max<size_t>(n, mesh.face_count()));
+    const bool runaway = at_least > kAutoSplitMaxGrowth * double(std::max<size_t>(n, mesh.face_count()));
+    if (runaway && !auto_split)
+      throw OptionError("coarsen: splitting the edges longer than 1/" + format_number(ratio) +
+                        " of the coarse edge length (" + format_number(result.coarse_edge_length) +
+                        ") would make at least " + format_number(at_least) + " faces from " +
+                        std::to_string(mesh.face_count()) +
+                        " (slivers: long edges, little area); use --split-edges auto or off");
     if (runaway) result.split_refused_faces = at_least;
     SplitEdgesResult split;
     if (!runaway) split = split_long_edges(mesh, result.coarse_edge_length / ratio, face_limit);

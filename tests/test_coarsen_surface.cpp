@@ -166,6 +166,10 @@ TEST_CASE("coarsen_surface: auto leaves the long edges of slivers as they are in
   CHECK(r.split_ratio == 0);
   CHECK(r.surface.face_count() == needle.face_count());
   CHECK(r.job.coarse.mesh.vertex_count() == n);
+  // An explicit ratio there is refused, at once, instead of taking seconds and hundreds of MB.
+  CoarsenSurfaceOptions asked = with_n(n);
+  asked.split_edges = kAutoSplitEdgesRatio;
+  CHECK_THROWS_WITH_AS(coarsen_surface(needle, asked), doctest::Contains("would make at least"), OptionError);
   // A strip as wide as it is long is no runaway: split as before.
   const Mesh wide = strip(5, 0.2, 3);
   const CoarsenSurfaceResult w = coarsen_surface(wide, with_n(n));
