@@ -387,7 +387,7 @@ static std::array<double, 3> choose_origin(const ReadOptions& options, const dou
 static Mesh finish_mesh(RawMesh&& raw, const std::array<double, 3>& origin, bool weld, ReadStats& stats) {
   const size_t vertex_count = raw.positions.size() / 3;
   std::vector<float> positions(raw.positions.size());
-  if (origin[0] == 0 && origin[1] == 0 && origin[2] == 0) {
+  if (is_zero(origin)) {
     for (size_t i = 0; i < positions.size(); ++i) positions[i] = static_cast<float>(raw.positions[i]);
   } else {
     for (size_t v = 0; v < vertex_count; ++v)

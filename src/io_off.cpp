@@ -141,7 +141,9 @@ class OffReader {
   }
 
   // Parses a number and names the problem; positions must also be finite.
-  void number(std::string_view token, float& value, bool must_be_finite) { check(parse_float(token, value), token, must_be_finite); }
+  void number(std::string_view token, float& value, bool must_be_finite) {
+    check(parse_float(token, value), token, must_be_finite);
+  }
   void coordinate(std::string_view token, double& value) { check(parse_coordinate(token, value), token, true); }
 
   void check(NumberStatus status, std::string_view token, bool must_be_finite) {

@@ -625,7 +625,8 @@ void write_ply(OutputFile& out, const Mesh& mesh, const WriteOptions& options) {
   }
   for (size_t v = 0; v < vertex_count && doubles; ++v) {
     char* p = out.reserve(24);
-    for (int axis = 0; axis < 3; ++axis) p = store<double>(p, options.origin[axis] + double(mesh.positions[3 * v + axis]));
+    for (int axis = 0; axis < 3; ++axis)
+      p = store<double>(p, options.origin[axis] + double(mesh.positions[3 * v + axis]));
     out.advance(24);
   }
   const size_t face_bytes = 13 + (labels ? 7 : 0);

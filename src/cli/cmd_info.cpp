@@ -35,7 +35,7 @@ void row(const char* name, const std::string& value) { std::printf("%-24s %s\n",
 void row(const char* name, uint64_t value) { row(name, std::to_string(value)); }
 
 // A corner of the box in the file's frame: the mesh's float corner plus the origin it was moved by
-// (zero unless it is far from it; then %.17g shows the sum's digits).
+// (zero unless the mesh is far from it).
 std::array<double, 3> in_file_frame(const float p[3], const ReadStats& rs) {
   return {rs.origin[0] + double(p[0]), rs.origin[1] + double(p[1]), rs.origin[2] + double(p[2])};
 }

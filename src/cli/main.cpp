@@ -68,7 +68,8 @@ void prepare_allocator(const std::string& input_path) {
 Mesh read_mesh_noted(const std::string& path, const ReadOptions& options, bool quiet, ReadStats* stats) {
   ReadStats local;
   // A mesh far from the origin for its size (a georeferenced scan) is moved near it as it is read,
-  // so that 32-bit floats keep its shape; outputs are moved back (output_options).
+  // so that 32-bit floats keep its shape; each command writes its outputs with WriteOptions::origin
+  // set to the origin read, which moves them back.
   ReadOptions moved = options;
   moved.shift_far = true;
   Mesh mesh = read_mesh(path, moved, &local);

@@ -59,8 +59,8 @@ struct ReadStats {
 /// triangle came from; it is left empty (identity) when every face of the file was a triangle.
 /// Vertices keep the file's order (a welded vertex takes the place of its first occurrence);
 /// unreferenced vertices are dropped. Positions are converted to float (PLY doubles are rounded),
-/// after ReadOptions::shift_far / origin moved them. Text coordinates are read correctly rounded to
-/// float (to double before a move).
+/// after ReadOptions::shift_far / origin moved them. OFF, ASCII PLY and ASCII STL coordinates are
+/// read correctly rounded (to double before a move, to float otherwise); OBJ's by tinyobjloader.
 /// OBJ: v/f statements only (v, v/vt, v/vt/vn, v//vn corners, negative = relative indices);
 /// OFF: [ST][C][N][n]OFF, data line based; PLY: ascii and binary of either byte order, a `face`
 /// element with a `vertex_indices` or `vertex_index` list (a header line before the first element
@@ -93,7 +93,8 @@ void check_mesh_format(const std::string& path);
 /// a temporary name beside `path` and renamed only when complete: a failure leaves no partial file.
 /// Text formats write 9 significant digits, so reading the file back gives the same floats (with a
 /// non-zero WriteOptions::origin: the shortest decimal that reads back as each double sum).
-/// PLY: vertex float x y z (double with a non-zero origin), face `list uchar int vertex_indices`; STL: binary, with facet normals.
+/// PLY: vertex float x y z (double with a non-zero origin), face `list uchar int vertex_indices`;
+/// STL: binary, with facet normals.
 /// Throws FileError (cannot create, write or rename; unknown extension), and OptionError before
 /// creating anything when the mesh is inconsistent (index out of range, arrays not in threes) or
 /// face_labels does not have one entry per face.
