@@ -1405,11 +1405,10 @@ uint32_t Mesher::triangulate_polygon(uint32_t region, const std::vector<uint32_t
           ++c;
         if (c < best_cost || (c == best_cost && q > best_quality)) best_cost = c, best_quality = q, best_k = k;
       }
-      if (best_k != kNone) {
-        cost[ij] = cost[row_j + i] = best_cost;
-        quality[ij] = quality[row_j + i] = best_quality;
-        choice[ij] = best_k;
-      }
+      assert(best_k != kNone);  // the first k always beats kWorst
+      cost[ij] = cost[row_j + i] = best_cost;
+      quality[ij] = quality[row_j + i] = best_quality;
+      choice[ij] = best_k;
     }
   std::vector<std::pair<uint32_t, uint32_t>> stack{{0, m - 1}};
   while (!stack.empty()) {

@@ -488,11 +488,11 @@ inline constexpr double kSplitEdgesAuto = -1;
 inline constexpr double kAutoSplitEdgesRatio = 1.5;
 /// kSplitEdgesAuto leaves the long edges as they are where splitting them would make more than this
 /// many faces per cluster or per input face (split_long_edges_min_faces), and an explicit ratio is
-/// refused there (OptionError): where the faces are
-/// slivers with long edges and almost no area, the coarse edge length follows from that area and
-/// the split would go on for millions of faces (7 faces of libcgal-demo's degtri_sliding, welded:
-/// more than 24 GB). The largest growth measured on libcgal-demo's meshes is far below it
-/// (bench/RESULTS.md, "Coarsening: long faces").
+/// refused there (OptionError): where the faces are slivers with long edges and almost no area,
+/// the coarse edge length follows from that area and the split would go on for millions of faces
+/// (7 faces of libcgal-demo's degtri_sliding, welded: more than 24 GB). The largest growth
+/// measured on libcgal-demo's meshes is 14, far below it (bench/RESULTS.md, "Coarsening: long
+/// faces").
 inline constexpr double kAutoSplitMaxGrowth = 1000;
 
 /// The whole of `meshcvt coarsen` between reading and writing: what it does to the input before
