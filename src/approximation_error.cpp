@@ -9,6 +9,8 @@
 #include <cassert>
 #include <cmath>
 #include <exception>
+#include <future>
+#include <optional>
 #include <string>
 #include <system_error>
 #include <thread>
@@ -128,69 +130,92 @@ double face_distance2(const Mesh& m, uint32_t f, const double q[3]) {
   return closest_point_on_triangle(q, v[0], v[1], v[2], p);
 }
 
-OneSided measure(const Surface& from, const Mesh& to_mesh, const TriangleBvh& to, uint64_t n, uint64_t seed,
-                 unsigned threads) {
-  const uint64_t points = n + from.vertices.size();
-  const size_t chunks = size_t((points + kChunk - 1) / kChunk);
-  std::vector<ChunkResult> results(chunks);
-  std::atomic<size_t> next{0};
-  auto work = [&] {
-    for (size_t chunk; (chunk = next.fetch_add(1)) < chunks;) {
-      ChunkResult r;
-      uint64_t begin = uint64_t(chunk) * kChunk, end = std::min<uint64_t>(points, begin + kChunk);
-      uint32_t face = 0, previous_face = kNone;
-      if (begin < n) {  // start the face walk where this chunk's first stratum lies
-        double t = double(begin) / double(n) * from.total_area;
-        face = uint32_t(std::upper_bound(from.cumulative_area.begin(), from.cumulative_area.end(), t) -
-                        from.cumulative_area.begin());
-        if (face >= from.cumulative_area.size()) face = from.last_face_with_area;
-      }
-      for (uint64_t i = begin; i < end; ++i) {
-        double q[3];
-        bool is_sample = i < n;
-        if (is_sample) {
-          sample_point(from, seed, i, n, face, q);
-        } else {
-          const float* p = &from.mesh->positions[3 * size_t(from.vertices[i - n])];
-          q[0] = p[0], q[1] = p[1], q[2] = p[2];
-        }
-        // Consecutive points are close together, so the previous point's nearest face bounds this
-        // one's distance from the start; a bounded query skips more of the tree and returns the
-        // same hit as an unbounded one (the bound is never below the true distance).
-        TriangleBvh::Hit hit;
-        if (previous_face != kNone) hit = to.closest_point(q, face_distance2(to_mesh, previous_face, q));
-        assert(previous_face == kNone || hit.face != kNone);  // the previous face itself is within the bound
-        if (hit.face == kNone) hit = to.closest_point(q);
-        previous_face = hit.face;
-        const double d2 = hit.distance2;
-        double d = std::sqrt(d2);
-        r.max = std::max(r.max, d);
-        if (is_sample) {
-          r.sum += d;
-          r.sum2 += d2;
-        }
-      }
-      results[chunk] = r;
+// The points of `from` (n samples, then its vertices) measured against the tree of `to`, cut into
+// fixed chunks that any thread may take (work() until none is left): the chunks' results are
+// combined in chunk order, so who took which changes nothing.
+class OneSidedJob {
+ public:
+  OneSidedJob(const Surface& from, const Mesh& to_mesh, const TriangleBvh& to, uint64_t n, uint64_t seed)
+      : from_(from), to_mesh_(to_mesh), to_(to), n_(n), seed_(seed), points_(n + from.vertices.size()),
+        results_(size_t((points_ + kChunk - 1) / kChunk)) {}
+
+  size_t chunks() const { return results_.size(); }
+
+  // Takes chunks until every chunk is taken (safe to call from several threads at once).
+  void work() {
+    for (size_t chunk; (chunk = next_.fetch_add(1)) < results_.size();) results_[chunk] = measure_chunk(chunk);
+  }
+
+  // Once every work() call has returned.
+  OneSided result() const {
+    OneSided out;
+    for (const ChunkResult& r : results_) {  // fixed order: the same sums for any thread count
+      out.max = std::max(out.max, r.max);
+      out.sum += r.sum;
+      out.sum2 += r.sum2;
     }
-  };
-  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
-  threads = unsigned(std::min<size_t>(threads, chunks));
+    return out;
+  }
+
+ private:
+  ChunkResult measure_chunk(size_t chunk) const {
+    ChunkResult r;
+    uint64_t begin = uint64_t(chunk) * kChunk, end = std::min<uint64_t>(points_, begin + kChunk);
+    uint32_t face = 0, previous_face = kNone;
+    if (begin < n_) {  // start the face walk where this chunk's first stratum lies
+      double t = double(begin) / double(n_) * from_.total_area;
+      face = uint32_t(std::upper_bound(from_.cumulative_area.begin(), from_.cumulative_area.end(), t) -
+                      from_.cumulative_area.begin());
+      if (face >= from_.cumulative_area.size()) face = from_.last_face_with_area;
+    }
+    for (uint64_t i = begin; i < end; ++i) {
+      double q[3];
+      bool is_sample = i < n_;
+      if (is_sample) {
+        sample_point(from_, seed_, i, n_, face, q);
+      } else {
+        const float* p = &from_.mesh->positions[3 * size_t(from_.vertices[i - n_])];
+        q[0] = p[0], q[1] = p[1], q[2] = p[2];
+      }
+      // Consecutive points are close together, so the previous point's nearest face bounds this
+      // one's distance from the start; a bounded query skips more of the tree and returns the
+      // same hit as an unbounded one (the bound is never below the true distance).
+      TriangleBvh::Hit hit;
+      if (previous_face != kNone) hit = to_.closest_point(q, face_distance2(to_mesh_, previous_face, q));
+      assert(previous_face == kNone || hit.face != kNone);  // the previous face itself is within the bound
+      if (hit.face == kNone) hit = to_.closest_point(q);
+      previous_face = hit.face;
+      const double d2 = hit.distance2;
+      double d = std::sqrt(d2);
+      r.max = std::max(r.max, d);
+      if (is_sample) {
+        r.sum += d;
+        r.sum2 += d2;
+      }
+    }
+    return r;
+  }
+
+  const Surface& from_;
+  const Mesh& to_mesh_;
+  const TriangleBvh& to_;
+  const uint64_t n_, seed_, points_;
+  std::vector<ChunkResult> results_;
+  std::atomic<size_t> next_{0};
+};
+
+// Runs `work` on the calling thread and up to threads - 1 more (fewer when no more threads are to
+// be had: the ones running take every chunk anyway), and waits for all of them.
+template <class Work>
+void run_on_threads(unsigned threads, const Work& work) {
   std::vector<std::thread> pool;
   try {
+    pool.reserve(threads);
     for (unsigned i = 1; i < threads; ++i) pool.emplace_back(work);
-  } catch (const std::system_error&) {
-    // No more threads to be had: the ones running (and this one) pull every chunk anyway.
+  } catch (const std::exception&) {  // std::system_error, or std::bad_alloc for the list
   }
   work();
   for (auto& t : pool) t.join();
-
-  OneSided out;
-  for (const ChunkResult& r : results) {  // fixed order: the same sums for any thread count
-    out.max = std::max(out.max, r.max);
-    out.sum += r.sum;
-    out.sum2 += r.sum2;
-  }
-  return out;
 }
 
 }  // namespace
@@ -202,37 +227,73 @@ uint64_t default_error_samples(const Mesh& a, const Mesh& ref) {
 
 ApproximationError approximation_error(const Mesh& a, const Mesh& ref, uint64_t samples_per_mesh, unsigned threads,
                                        uint64_t seed) {
-  Surface sa = make_surface(a, "measured"), sr = make_surface(ref, "reference");
   const uint64_t n = samples_per_mesh ? samples_per_mesh : default_error_samples(a, ref);
+  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
 
-  // The two trees are independent: build them side by side (the big one dominates the time).
-  // Morton trees: each is queried about once per sample or vertex of the other mesh, so a build
-  // three times cheaper than the SAH's outweighs its somewhat slower queries (measured by `meshcvt
-  // stats`: the 4.8M bunny's error 2.73 -> 2.06 s and 753 -> 583 MB peak, the 1.2M bunny's 1.04 ->
-  // 0.87 s, bunny00's 0.09 s either way). The distances are the same (TriangleBvh's exactness).
-  TriangleBvh bvh_a, bvh_ref;
-  {
-    std::exception_ptr failure;
-    std::thread builder([&] {
-      try {
-        bvh_ref = TriangleBvh(ref, 0, TriangleBvh::Build::morton);
-      } catch (...) {
-        failure = std::current_exception();
-      }
-    });
-    try {
-      bvh_a = TriangleBvh(a, 0, TriangleBvh::Build::morton);
-    } catch (...) {
-      builder.join();
-      throw;
-    }
-    builder.join();
-    if (failure) std::rethrow_exception(failure);
-  }
-
+  // Each side's points are measured against the other side's tree. Morton trees: each is queried
+  // about once per sample or vertex of the other mesh, so a build three times cheaper than the
+  // SAH's outweighs its somewhat slower queries (measured by `meshcvt stats`: the 4.8M bunny's
+  // error 2.73 -> 2.06 s and 753 -> 583 MB peak, the 1.2M bunny's 1.04 -> 0.87 s, bunny00's 0.09 s
+  // either way). The distances are the same (TriangleBvh's exactness).
+  // The larger tree's build (about a second at 4.8M faces, on one thread) overlaps the measurement
+  // that does not need it: one thread builds it while the others measure the larger mesh's points
+  // against the smaller tree, and joins them once built; then every thread measures against it.
+  const bool a_is_small = a.face_count() <= ref.face_count();
+  const Mesh& small = a_is_small ? a : ref;
+  const Mesh& big = a_is_small ? ref : a;
   // Different seeds for the two sides, so that a mesh compared with itself gets distinct samples.
-  OneSided ab = measure(sa, ref, bvh_ref, n, mix64(seed), threads);
-  OneSided ba = measure(sr, a, bvh_a, n, mix64(seed ^ 0x5bd1e995u), threads);
+  const uint64_t seed_a = mix64(seed), seed_ref = mix64(seed ^ 0x5bd1e995u);
+  Surface sa, sr;
+  TriangleBvh small_tree, big_tree;
+  std::optional<OneSidedJob> against_small;
+  auto prepare = [&] {
+    sa = make_surface(a, "measured");
+    sr = make_surface(ref, "reference");
+    small_tree = TriangleBvh(small, 1, TriangleBvh::Build::morton);
+    against_small.emplace(a_is_small ? sr : sa, small, small_tree, n, a_is_small ? seed_ref : seed_a);
+  };
+  auto build_big = [&] { big_tree = TriangleBvh(big, 1, TriangleBvh::Build::morton); };
+  std::thread builder;
+  std::promise<bool> prepared;  // true: against_small is ready for the builder to join
+  std::exception_ptr build_failure;
+  if (threads > 1) {
+    try {
+      builder = std::thread([&, ready = prepared.get_future()]() mutable {
+        try {
+          build_big();
+        } catch (...) {
+          build_failure = std::current_exception();
+          return;
+        }
+        if (ready.get()) against_small->work();
+      });
+    } catch (const std::system_error&) {
+      // No thread to be had: the tree is built below, on this one.
+    }
+  }
+  try {
+    prepare();
+  } catch (...) {
+    if (builder.joinable()) {
+      prepared.set_value(false);
+      builder.join();
+    }
+    throw;
+  }
+  if (builder.joinable()) {
+    prepared.set_value(true);
+    run_on_threads(unsigned(std::min<size_t>(threads - 1, against_small->chunks())),
+                   [&] { against_small->work(); });
+    builder.join();
+    if (build_failure) std::rethrow_exception(build_failure);
+  } else {
+    build_big();
+    run_on_threads(unsigned(std::min<size_t>(threads, against_small->chunks())), [&] { against_small->work(); });
+  }
+  OneSidedJob against_big(a_is_small ? sa : sr, big, big_tree, n, a_is_small ? seed_a : seed_ref);
+  run_on_threads(unsigned(std::min<size_t>(threads, against_big.chunks())), [&] { against_big.work(); });
+  const OneSided ab = a_is_small ? against_big.result() : against_small->result();
+  const OneSided ba = a_is_small ? against_small->result() : against_big.result();
 
   ApproximationError e;
   e.samples = n;

@@ -206,16 +206,30 @@ TEST_CASE("approximation_error: one surface contained in the other, in the same 
   CHECK(e.b_to_a_mean == doctest::Approx(0.25).epsilon(2e-3));
   CHECK(e.b_to_a_rms == doctest::Approx(std::sqrt(1.0 / 6)).epsilon(2e-3));
   CHECK(e.rms == doctest::Approx(std::sqrt(1.0 / 12)).epsilon(2e-3));  // both sides: (0 + 1/6) / 2
+
+  // The roles swapped, the measured mesh now the one with more faces (whose tree is built while
+  // the other side is measured): each side's numbers go with its own side.
+  for (unsigned threads : {1u, 2u, 3u}) {
+    meshcvt::ApproximationError swapped = meshcvt::approximation_error(ref, a, 60000, threads);
+    CHECK(swapped.a_to_b_max == doctest::Approx(1).epsilon(1e-9));
+    CHECK(swapped.b_to_a_max < 1e-6);
+    CHECK(swapped.a_to_b_mean == doctest::Approx(0.25).epsilon(2e-3));
+    CHECK(swapped.b_to_a_mean < 1e-6);
+    CHECK(swapped.diagonal == doctest::Approx(std::sqrt(2.0)));  // the reference's box is now 1 x 1 x 0
+  }
 }
 
 TEST_CASE("approximation_error: the same numbers for any thread count, different for another seed") {
   Mesh a = octahedron(), ref = tetrahedron();
   meshcvt::ApproximationError one = meshcvt::approximation_error(a, ref, 50000, 1);
-  meshcvt::ApproximationError three = meshcvt::approximation_error(a, ref, 50000, 3);
-  CHECK(one.hausdorff == three.hausdorff);
-  CHECK(one.rms == three.rms);
-  CHECK(one.a_to_b_mean == three.a_to_b_mean);
-  CHECK(one.b_to_a_rms == three.b_to_a_rms);
+  for (unsigned threads : {2u, 3u, 8u}) {
+    // (The larger mesh's tree is built on a thread of its own beside the other side's measurement.)
+    meshcvt::ApproximationError many = meshcvt::approximation_error(a, ref, 50000, threads);
+    CHECK(one.hausdorff == many.hausdorff);
+    CHECK(one.rms == many.rms);
+    CHECK(one.a_to_b_mean == many.a_to_b_mean);
+    CHECK(one.b_to_a_rms == many.b_to_a_rms);
+  }
   meshcvt::ApproximationError other = meshcvt::approximation_error(a, ref, 50000, 1, 2);
   CHECK(other.rms != one.rms);
   CHECK(other.rms == doctest::Approx(one.rms).epsilon(1e-2));
