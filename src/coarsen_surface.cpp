@@ -398,18 +398,19 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
       for (size_t f = 0; f < mesh.face_count(); ++f) face_limit[f] = limit_of(density, f);
     }
     // Not where the split would run away (slivers: see kAutoSplitMaxGrowth): auto leaves the edges
-    // as they are, an explicit ratio is refused (it would take minutes and gigabytes).
-    const double at_least = split_long_edges_min_faces(mesh, result.coarse_edge_length / ratio, face_limit);
-    const bool runaway = at_least > kAutoSplitMaxGrowth * double(std::max<size_t>(n, mesh.face_count()));
-    if (runaway && !auto_split)
+    // as they are, an explicit ratio is refused (it would take minutes and gigabytes). The budget
+    // stops the split itself too: the refinement's propagation along slivers can make many times
+    // split_long_edges_min_faces, which alone refuses only what is beyond it for sure.
+    const double budget = kAutoSplitMaxGrowth * double(std::max<size_t>(n, mesh.face_count()));
+    SplitEdgesResult split = split_long_edges(mesh, result.coarse_edge_length / ratio, face_limit,
+                                              uint64_t(std::min(budget, 1e18)));
+    if (split.over_budget && !auto_split)
       throw OptionError("coarsen: splitting the edges longer than 1/" + format_number(ratio) +
                         " of the coarse edge length (" + format_number(result.coarse_edge_length) +
-                        ") would make at least " + format_number(at_least) + " faces from " +
+                        ") would make more than " + format_number(double(split.over_budget_faces)) + " faces from " +
                         std::to_string(mesh.face_count()) +
                         " (slivers: long edges, little area); use --split-edges auto or off");
-    if (runaway) result.split_refused_faces = at_least;
-    SplitEdgesResult split;
-    if (!runaway) split = split_long_edges(mesh, result.coarse_edge_length / ratio, face_limit);
+    if (split.over_budget) result.split_refused_faces = double(split.over_budget_faces);
     if (split.split_edges > 0) {
       result.split_ratio = ratio;
       result.split_edges = split.split_edges;

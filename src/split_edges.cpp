@@ -135,15 +135,22 @@ double split_long_edges_min_faces(const Mesh& mesh, double max_length, const std
   return std::max(area_bound, edge_bound);
 }
 
-SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std::vector<double>& face_max_length) {
+SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std::vector<double>& face_max_length,
+                                  uint64_t max_faces) {
   const size_t nf = mesh.face_count();
   // A request far beyond 32-bit indices is refused before any work (the inputs are checked there).
   const double at_least = split_long_edges_min_faces(mesh, max_length, face_max_length);
   if (!(at_least <= double(kMaxFaces)))
     throw OptionError("split_long_edges: the limit would make more than " + std::to_string(kMaxFaces) +
                       " faces (at least " + std::to_string(uint64_t(std::min(at_least, 1e19))) + ")");
-
   SplitEdgesResult out;
+  // Beyond the budget already by the bound: no work at all.
+  if (max_faces > 0 && at_least > double(max_faces)) {
+    out.over_budget = true;
+    out.over_budget_faces = uint64_t(std::ceil(at_least));
+    return out;
+  }
+
   out.mesh.positions = mesh.positions;
   out.mesh.indices = mesh.indices;
   out.parent.resize(nf);
@@ -229,6 +236,12 @@ SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std
     auto mid = [&](size_t f, int k) { return collapsed(&v[3 * f]) ? kNone : midpoint[edge_of[3 * f + k]]; };
     uint64_t children = 0;
     for (size_t f = 0; f < faces; ++f) children += 1 + (mid(f, 0) != kNone) + (mid(f, 1) != kNone) + (mid(f, 2) != kNone);
+    if (max_faces > 0 && children > max_faces) {  // (rounds only add faces: the result would have more)
+      SplitEdgesResult over;
+      over.over_budget = true;
+      over.over_budget_faces = children;
+      return over;
+    }
     if (children > kMaxFaces)
       throw OptionError("split_long_edges: the result would have more than " + std::to_string(kMaxFaces) + " faces");
     indices.clear();  // (no copy of the last round's faces when it grows)

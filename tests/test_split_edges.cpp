@@ -227,6 +227,36 @@ TEST_CASE("split_long_edges: the same input gives the same output; bad limits an
   CHECK_THROWS_AS(meshcvt::split_long_edges(bad, 1), meshcvt::OptionError);
 }
 
+TEST_CASE("split_long_edges: a face budget stops the split; within it the result is the same") {
+  // A needle tetrahedron (apex at the origin, a base 1e-4 wide at distance 1): its split makes about
+  // 60 times split_long_edges_min_faces, the propagation along the needle's long edges.
+  Mesh needle;
+  needle.positions = {0, 0, 0, 1, 0, 0, 1, 1e-4f, 0, 1, 0, 1e-4f};
+  needle.indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+  const double limit = 0.003;
+  const double bound = meshcvt::split_long_edges_min_faces(needle, limit);
+  const meshcvt::SplitEdgesResult all = meshcvt::split_long_edges(needle, limit);
+  const uint64_t faces = all.mesh.face_count();
+  REQUIRE(double(faces) > 20 * bound);
+  CHECK_FALSE(all.over_budget);
+
+  const meshcvt::SplitEdgesResult stopped = meshcvt::split_long_edges(needle, limit, {}, uint64_t(10 * bound));
+  CHECK(stopped.over_budget);
+  CHECK(stopped.over_budget_faces > uint64_t(10 * bound));
+  CHECK(stopped.over_budget_faces <= faces);  // a round's faces: at most the end's
+  CHECK(stopped.mesh.face_count() == 0);
+  CHECK(meshcvt::split_long_edges(needle, limit, {}, faces - 1).over_budget);
+  const meshcvt::SplitEdgesResult exact = meshcvt::split_long_edges(needle, limit, {}, faces);
+  CHECK_FALSE(exact.over_budget);
+  CHECK(exact.mesh.indices == all.mesh.indices);
+  CHECK(exact.mesh.positions == all.mesh.positions);
+  CHECK(exact.parent == all.parent);
+  // Beyond the budget by the bound alone: no round runs.
+  const meshcvt::SplitEdgesResult early = meshcvt::split_long_edges(needle, limit, {}, uint64_t(bound / 2));
+  CHECK(early.over_budget);
+  CHECK(early.over_budget_faces == uint64_t(std::ceil(bound)));
+}
+
 TEST_CASE("coarse_edge_length: equilateral triangles of n vertices, cells as an optimal CVT's") {
   // A closed mesh of n vertices has 2n triangles: each (sqrt 3 / 4) l^2.
   const double l = meshcvt::coarse_edge_length(100.0, 50);

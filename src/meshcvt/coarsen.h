@@ -487,8 +487,9 @@ inline constexpr int kSubdivideAuto = -1;
 inline constexpr double kSplitEdgesAuto = -1;
 inline constexpr double kAutoSplitEdgesRatio = 1.5;
 /// kSplitEdgesAuto leaves the long edges as they are where splitting them would make more than this
-/// many faces per cluster or per input face (split_long_edges_min_faces), and an explicit ratio is
-/// refused there (OptionError): where the faces are slivers with long edges and almost no area,
+/// many faces per cluster or per input face (split_long_edges_min_faces, and the split itself stops
+/// at that budget: see split_long_edges' max_faces), and an explicit ratio is refused there
+/// (OptionError): where the faces are slivers with long edges and almost no area,
 /// the coarse edge length follows from that area and the split would go on for millions of faces
 /// (7 faces of libcgal-demo's degtri_sliding, welded: more than 24 GB). The largest growth
 /// measured on libcgal-demo's meshes is 14, far below it (bench/RESULTS.md, "Coarsening: long
@@ -574,7 +575,8 @@ struct CoarsenSurfaceResult {
   double split_ratio = 0;            ///< R the surface was split at (0: not split)
   uint64_t split_edges = 0;          ///< edges split in the surface (0: not split)
   /// kSplitEdgesAuto found long edges but left them (kAutoSplitMaxGrowth): at least this many faces
-  /// would have come out (split_long_edges_min_faces). 0 when it did not.
+  /// would have come out (split_long_edges_min_faces, or the faces of the split's round that went
+  /// past the budget). 0 when it did not.
   double split_refused_faces = 0;
   /// The jobs run when the first coarse mesh kept defects, in order: the first (split or as
   /// given); with kSplitEdgesAuto the partly split one (when only some components had defects) and

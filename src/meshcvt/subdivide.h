@@ -74,6 +74,10 @@ struct SplitEdgesResult {
   std::vector<uint32_t> parent; ///< per output face: the input face it lies in
   uint64_t split_edges = 0;     ///< edges split, over all rounds
   unsigned rounds = 0;          ///< rounds of splitting (0: nothing was too long)
+  /// The split stopped at `max_faces`: a round would have made over_budget_faces faces (a lower
+  /// bound on what the whole split makes). mesh, parent and the counts above are then empty.
+  bool over_budget = false;
+  uint64_t over_budget_faces = 0;
 };
 
 /// Splits every edge longer than its limit at its midpoint, with longest-edge (Rivara) refinement,
@@ -92,9 +96,15 @@ struct SplitEdgesResult {
 ///         together, in input face order, parent[i] naming f; source_polygon follows (the input
 ///         face id when the input has none and anything was split; left empty when nothing was).
 ///         The same input gives the same output.
+/// max_faces (0: none): the most faces the result may have. A split whose lower bound
+///         (split_long_edges_min_faces) or any round exceeds it stops there (over_budget): a face
+///         budget, since on slivers (long edges, almost no area) the refinement's propagation can
+///         make many times that bound (a needle-shaped tetrahedron of 2048 faces: 15 million faces
+///         where the bound said under 2 million).
 /// Throws OptionError on a limit that is not finite and > 0, arrays of the wrong size, or a result
 /// beyond 32-bit indices.
-SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std::vector<double>& face_max_length = {});
+SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std::vector<double>& face_max_length = {},
+                                  uint64_t max_faces = 0);
 
 /// A lower bound on the faces split_long_edges(mesh, max_length, face_max_length) makes, before
 /// any work: no face within a limit l holds more than (sqrt 3 / 4) l^2 of area, and an edge of
