@@ -71,9 +71,6 @@
 #include <queue>
 #include <string>
 #include <vector>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 #include "cluster_engine.h"
 #include "meshcvt/approximate.h"
@@ -1392,30 +1389,6 @@ uint32_t Mesher::triangulate_polygon(uint32_t region, const std::vector<uint32_t
       uint32_t best_k = kNone;
       for (uint32_t k = i + 1; k < j; ++k) {
         const size_t ik = row_i + k, kj = row_j + k;
-#if defined(__SSE2__)
-        // Four k's at a time while none of them can do better (the test below, in four lanes):
-        // nearly every k on a large polygon. A block with one that might goes through the test
-        // and the rest one k at a time, in order, as without it. The lanes' min may differ from
-        // std::min only where a value is NaN, and there the scalar test finds nothing better
-        // either, so a skipped block never held a k that would have been taken.
-        if (k + 4 <= j) {
-          const __m128i bias = _mm_set1_epi32(int32_t(0x80000000u));  // unsigned order by signed compares
-          const __m128i c4 = _mm_add_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(&cost[ik])),
-                                           _mm_loadu_si128(reinterpret_cast<const __m128i*>(&cost[kj])));
-          const __m128i best_c = _mm_set1_epi32(int32_t(best_cost));
-          const int below = _mm_movemask_ps(_mm_castsi128_ps(
-              _mm_cmplt_epi32(_mm_xor_si128(c4, bias), _mm_xor_si128(best_c, bias))));
-          const int equal = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(c4, best_c)));
-          const __m128d best_q = _mm_set1_pd(best_quality);
-          const __m128d q01 = _mm_min_pd(_mm_loadu_pd(&quality[ik]), _mm_loadu_pd(&quality[kj]));
-          const __m128d q23 = _mm_min_pd(_mm_loadu_pd(&quality[ik + 2]), _mm_loadu_pd(&quality[kj + 2]));
-          const int above = _mm_movemask_pd(_mm_cmpgt_pd(q01, best_q)) | _mm_movemask_pd(_mm_cmpgt_pd(q23, best_q)) << 2;
-          if ((below | (equal & above)) == 0) {
-            k += 3;
-            continue;
-          }
-        }
-#endif
         uint32_t c = cost[ik] + cost[kj];
         double q = std::min(quality[ik], quality[kj]);
         if (c > best_cost || (c == best_cost && !(q > best_quality))) continue;  // cannot do better
