@@ -152,6 +152,18 @@ TEST_CASE("coarsen_surface: a CAD-like cylinder's long edges are split first, an
   CHECK(longest_edge(finer.surface) <= finer.coarse_edge_length / 3 * (1 + 1e-6));
 }
 
+// Where auto refused to split `slivers` for n clusters (r): the surface as given, n vertices, and an
+// explicit ratio refused at once instead of taking seconds and hundreds of MB.
+static void check_split_left(const Mesh& slivers, uint32_t n, const CoarsenSurfaceResult& r) {
+  CHECK(r.split_edges == 0);
+  CHECK(r.split_ratio == 0);
+  CHECK(r.surface.face_count() == slivers.face_count());
+  CHECK(r.job.coarse.mesh.vertex_count() == n);
+  CoarsenSurfaceOptions asked = with_n(n);
+  asked.split_edges = kAutoSplitEdgesRatio;
+  CHECK_THROWS_WITH_AS(coarsen_surface(slivers, asked), doctest::Contains("would make more than"), OptionError);
+}
+
 TEST_CASE("coarsen_surface: the split of slivers stops at its budget where the lower bound is far below") {
   // A double needle: apexes at x = 0 and 2, a triangle 1e-4 wide at x = 1 between them (six long
   // edges: enough for auto to split at n = 4). The bound (split_long_edges_min_faces) is within
@@ -169,12 +181,7 @@ TEST_CASE("coarsen_surface: the split of slivers stops at its budget where the l
   CHECK(split_long_edges_min_faces(needle, limit) < budget);
   CHECK(split_long_edges(needle, limit).mesh.face_count() > budget);  // what the split makes, unchecked
   CHECK(r.split_refused_faces > budget);
-  CHECK(r.split_edges == 0);
-  CHECK(r.surface.face_count() == needle.face_count());
-  CHECK(r.job.coarse.mesh.vertex_count() == n);
-  CoarsenSurfaceOptions asked = with_n(n);
-  asked.split_edges = kAutoSplitEdgesRatio;
-  CHECK_THROWS_WITH_AS(coarsen_surface(needle, asked), doctest::Contains("would make more than"), OptionError);
+  check_split_left(needle, n, r);
 }
 
 TEST_CASE("coarsen_surface: auto leaves the long edges of slivers as they are instead of running away") {
@@ -187,14 +194,7 @@ TEST_CASE("coarsen_surface: auto leaves the long edges of slivers as they are in
   const double at_least = split_long_edges_min_faces(needle, r.coarse_edge_length / kAutoSplitEdgesRatio);
   CHECK(at_least > kAutoSplitMaxGrowth * double(needle.face_count()));
   CHECK(r.split_refused_faces == std::ceil(at_least));  // (faces: the bound rounded up)
-  CHECK(r.split_edges == 0);
-  CHECK(r.split_ratio == 0);
-  CHECK(r.surface.face_count() == needle.face_count());
-  CHECK(r.job.coarse.mesh.vertex_count() == n);
-  // An explicit ratio there is refused, at once, instead of taking seconds and hundreds of MB.
-  CoarsenSurfaceOptions asked = with_n(n);
-  asked.split_edges = kAutoSplitEdgesRatio;
-  CHECK_THROWS_WITH_AS(coarsen_surface(needle, asked), doctest::Contains("would make more than"), OptionError);
+  check_split_left(needle, n, r);
   // A strip as wide as it is long is no runaway: split as before.
   const Mesh wide = strip(5, 0.2, 3);
   const CoarsenSurfaceResult w = coarsen_surface(wide, with_n(n));
