@@ -138,18 +138,18 @@ double split_long_edges_min_faces(const Mesh& mesh, double max_length, const std
 SplitEdgesResult split_long_edges(const Mesh& mesh, double max_length, const std::vector<double>& face_max_length,
                                   uint64_t max_faces) {
   const size_t nf = mesh.face_count();
+  // Beyond the budget already by the bound: no work at all (and no error, whatever the bound).
   // A request far beyond 32-bit indices is refused before any work (the inputs are checked there).
   const double at_least = split_long_edges_min_faces(mesh, max_length, face_max_length);
+  SplitEdgesResult out;
+  if (max_faces > 0 && at_least > double(max_faces)) {
+    out.over_budget = true;
+    out.over_budget_faces = uint64_t(std::min(std::ceil(at_least), 1.8e19));
+    return out;
+  }
   if (!(at_least <= double(kMaxFaces)))
     throw OptionError("split_long_edges: the limit would make more than " + std::to_string(kMaxFaces) +
                       " faces (at least " + std::to_string(uint64_t(std::min(at_least, 1e19))) + ")");
-  SplitEdgesResult out;
-  // Beyond the budget already by the bound: no work at all.
-  if (max_faces > 0 && at_least > double(max_faces)) {
-    out.over_budget = true;
-    out.over_budget_faces = uint64_t(std::ceil(at_least));
-    return out;
-  }
 
   out.mesh.positions = mesh.positions;
   out.mesh.indices = mesh.indices;

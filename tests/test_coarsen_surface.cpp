@@ -195,6 +195,12 @@ TEST_CASE("coarsen_surface: auto leaves the long edges of slivers as they are in
   CHECK(at_least > kAutoSplitMaxGrowth * double(needle.face_count()));
   CHECK(r.split_refused_faces == std::ceil(at_least));  // (faces: the bound rounded up)
   check_split_left(needle, n, r);
+  // Thinner still, the bound passes what 32-bit indices allow (about 1.43e9 faces): auto still
+  // leaves the edges, with the same note, rather than stopping the job with an error.
+  const Mesh thinner = strip(5, 0.2, 1e-17);
+  const CoarsenSurfaceResult t = coarsen_surface(thinner, with_n(n));
+  CHECK(t.split_refused_faces > 1.5e9);
+  check_split_left(thinner, n, t);
   // A strip as wide as it is long is no runaway: split as before.
   const Mesh wide = strip(5, 0.2, 3);
   const CoarsenSurfaceResult w = coarsen_surface(wide, with_n(n));
