@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "boundary_rule.h"
+
 namespace meshcvt {
 
 // Relative error allowed on every float distance and weighted sum the rule compares: each is a few
@@ -38,7 +40,13 @@ inline double comparison_budget(const RuleSide& a, const RuleSide& b) {
     lower_b += b.w[i] * r * r;
     root_sum_b += b.w[i] * r;
   }
-  double slack = down * lower_b - up * upper_a;
+  // The rule floors squares and products (kRuleFloor): a distance may come out lower than its exact
+  // value by up to three floors, a weighted sum by w times that plus a floor per term, now (side a's
+  // bound starts from it) and after the move (side b's).
+  double floored = 0;
+  for (int i = 0; i < a.n; ++i) floored += (3 * a.w[i] + 1) * double(kRuleFloor);
+  for (int i = 0; i < b.n; ++i) floored += (3 * b.w[i] + 1) * double(kRuleFloor);
+  double slack = down * lower_b - up * upper_a - 2 * floored;
   if (!(slack > 0)) return 0;
   // growth of the bounds for a displacement t: up (2 t root_sum_a + t^2 weight_a) + down 2 t root_sum_b
   double qa = up * weight_a, qc = 2 * (up * root_sum_a + down * root_sum_b);
@@ -57,8 +65,8 @@ struct EdgeSides {
   bool left_stays, right_stays, pair_in_p;
 };
 inline EdgeSides edge_sides(float d_lp, float d_lq, float d_rp, float d_rq, float w_l, float w_r) {
-  const float both_in_p = d_lp * w_l + d_rp * w_r, both_in_q = d_lq * w_l + d_rq * w_r;
-  return {{{w_l, w_r}, {d_lp, d_rp}, 2}, {{w_l, w_r}, {d_lq, d_rq}, 2}, d_lp <= d_lq, d_rp >= d_rq, both_in_p < both_in_q};
+  return {{{w_l, w_r}, {d_lp, d_rp}, 2}, {{w_l, w_r}, {d_lq, d_rq}, 2}, d_lp <= d_lq, d_rp >= d_rq,
+          case4_keeps_pair_in_p(d_lp, d_lq, d_rp, d_rq, w_l, w_r)};
 }
 
 // Budget of a face that stays for one cluster edge (f in V_p, g in V_q): the smallest displacement
