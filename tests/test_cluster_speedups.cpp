@@ -135,18 +135,20 @@ TEST_CASE("Lloyd steps: same result on any thread count; cluster() starts lower 
 // change its decision; if that bound were wrong anywhere, labels would differ from testing every
 // border face every iteration. Random initialization and the paper's mode make many moves and many
 // near-ties, the cases most likely to expose a bound that is too loose.
-TEST_CASE("rule budgets: generators moved by less than a face's budget leave its decision unchanged") {
-  // stay_budget and move_budget (rule_budget.h) on random cluster edges placed near the rule's
-  // thresholds: moving p's and q's generators by less than the budget (measured on the float
-  // coordinates, as the engine measures it) must not change whether the face moves. The engine
-  // re-tests a face only once that much movement has added up, so a budget too large would
-  // change labels there (the accelerator-off comparison below rarely reaches such a case).
-  std::mt19937_64 rng(11);
+namespace {
+// The budget check below at one scale: the cluster edges' layout has size `size` (1 = the unit box
+// of the normalized coordinates), the weights are scaled by `weight_scale`. Returns the edges
+// checked, the moving ones among them and the tight ones (a budget below 1e-3 of the size).
+struct BudgetCounts {
+  uint64_t checked = 0, moving = 0, tight = 0;
+};
+BudgetCounts check_rule_budgets(double size, double weight_scale, uint64_t seed) {
+  std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0), weight(0.1, 1.0), scale(0.5, 0.999);
-  auto offset = [&](const float base[3], double size, float out[3]) {
-    for (int k = 0; k < 3; ++k) out[k] = float(base[k] + size * unit(rng));
+  auto offset = [&](const float base[3], double extent, float out[3]) {
+    for (int k = 0; k < 3; ++k) out[k] = float(base[k] + size * extent * unit(rng));
   };
-  uint64_t checked = 0, tight = 0, moving = 0;
+  BudgetCounts counts;
   for (int trial = 0; trial < 20000; ++trial) {
     const float origin[3] = {0, 0, 0};
     float xl[3], xr[3], gp[3], gq[3];
@@ -154,7 +156,7 @@ TEST_CASE("rule budgets: generators moved by less than a face's budget leave its
     offset(xl, 0.05, xr);
     offset(xl, 0.5, gp);
     offset(gp, trial % 2 ? 0.01 : 0.2, gq);  // half of them with nearly equal distances
-    const float wl = float(weight(rng)), wr = float(weight(rng));
+    const float wl = float(weight_scale * weight(rng)), wr = float(weight_scale * weight(rng));
     auto decide = [&](const float p[3], const float q[3]) {
       return decide_cluster_edge(squared_distance(xl, p), squared_distance(xl, q), squared_distance(xr, p),
                                  squared_distance(xr, q), wl, wr);
@@ -167,12 +169,12 @@ TEST_CASE("rule budgets: generators moved by less than a face's budget leave its
       const double budget = moves ? move_budget(d_lp, d_lq, d_rp, d_rq, wl, wr, left)
                                   : stay_budget(d_lp, d_lq, d_rp, d_rq, wl, wr, left);
       if (!(budget > 0)) continue;
-      ++checked;
-      moving += moves;
-      tight += budget < 1e-3;
+      ++counts.checked;
+      counts.moving += moves;
+      counts.tight += budget < 1e-3 * size;
       for (int k = 0; k < 8; ++k) {
-        // Each generator displaced by less than the budget (at most 1: a budget far too large
-        // must still be caught).
+        // Each generator displaced by less than the budget (at most the layout's size: a budget
+        // far too large must still be caught).
         float np[3], nq[3];
         offset(gp, 1.0, np);
         offset(gq, 1.0, nq);
@@ -180,7 +182,7 @@ TEST_CASE("rule budgets: generators moved by less than a face's budget leave its
           double dir[3], len = 0;
           for (int c = 0; c < 3; ++c) dir[c] = double(n[c]) - g[c], len += dir[c] * dir[c];
           len = std::sqrt(len);
-          const double step = std::min(budget, 1.0) * scale(rng);
+          const double step = std::min(budget, size) * scale(rng);
           for (int c = 0; c < 3; ++c) n[c] = float(g[c] + (len > 0 ? dir[c] / len * step : 0.0));
         }
         double moved_p = 0, moved_q = 0;
@@ -190,18 +192,38 @@ TEST_CASE("rule budgets: generators moved by less than a face's budget leave its
         }
         if (!(std::sqrt(std::max(moved_p, moved_q)) < budget)) continue;  // float rounding overshot
         const EdgeMove after = decide(np, nq);
+        CAPTURE(size);
         CAPTURE(trial);
         CAPTURE(left);
         CHECK((after == (left ? EdgeMove::left_to_q : EdgeMove::right_to_p)) == moves);
       }
     }
   }
-  CAPTURE(checked);
-  CAPTURE(moving);
-  CAPTURE(tight);
-  CHECK(checked > 20000);   // most edges have a budget
-  CHECK(moving > 5000);     // both outcomes are covered
-  CHECK(tight > 1000);      // and many decisions close to their thresholds
+  return counts;
+}
+}  // namespace
+
+TEST_CASE("rule budgets: generators moved by less than a face's budget leave its decision unchanged") {
+  // stay_budget and move_budget (rule_budget.h) on random cluster edges placed near the rule's
+  // thresholds: moving p's and q's generators by less than the budget (measured on the float
+  // coordinates, as the engine measures it) must not change whether the face moves. The engine
+  // re-tests a face only once that much movement has added up, so a budget too large would
+  // change labels there (the accelerator-off comparison below rarely reaches such a case).
+  const BudgetCounts unit_box = check_rule_budgets(1.0, 1.0, 11);
+  CAPTURE(unit_box.checked);
+  CAPTURE(unit_box.moving);
+  CAPTURE(unit_box.tight);
+  CHECK(unit_box.checked > 20000);  // most edges have a budget
+  CHECK(unit_box.moving > 5000);    // both outcomes are covered
+  CHECK(unit_box.tight > 1000);     // and many decisions close to their thresholds
+  // Where squares and products straddle the rule's floor (kRuleFloor, 2^-100): distances near
+  // 2^-45 (squares of nearby points' coordinates near 2^-100) and weights near 2^-5.
+  const BudgetCounts at_floor = check_rule_budgets(0x1p-45, 0x1p-5, 12);
+  CAPTURE(at_floor.checked);
+  CAPTURE(at_floor.moving);
+  MESSAGE("budgets at the floor: " << at_floor.checked << " checked, " << at_floor.moving << " moving");
+  CHECK(at_floor.checked > 5000);
+  CHECK(at_floor.moving > 1000);
 }
 
 TEST_CASE("margin accelerator: identical labels, moves and energies to testing every border face") {
