@@ -39,6 +39,7 @@
 #include "vk_buffer.h"
 #include "vk_context.h"
 #include "vk_pipeline.h"
+#include "vk_rule_check.h"
 #include "vk_sequence.h"
 
 namespace meshcvt {
@@ -141,6 +142,10 @@ std::unique_ptr<DeviceKit> borrow_kit(int device_index) {
                                                      sizeof(GpuPush), kWorkgroup);
   kit->flags = std::make_unique<vk::ComputePipeline>(ctx, MESHCVT_SPIRV(cluster_flags), "cluster_flags",
                                                      sizeof(GpuPush), kWorkgroup);
+  // The engine gives the CPU engine's labels only where the device computes the boundary rule as
+  // the CPU does. Checked once per device and process (the kit is kept), before any clustering:
+  // a driver that fuses or reorders despite `precise` would otherwise change labels silently.
+  vk::check_boundary_rule(ctx);
   return kit;
 }
 

@@ -10,6 +10,7 @@
 
 #include "meshcvt/error.h"
 #include "vk_context.h"
+#include "vk_rule_check.h"
 #include "vk_selftest.h"
 
 namespace meshcvt {
@@ -173,6 +174,7 @@ double self_test_device(uint32_t index) {
   {
     vk::Context context(index);
     vk::run_self_test(context);
+    vk::check_boundary_rule(context);
   }
   // With MESHCVT_VALIDATION=1 a validation message fails the test too: the layer found misuse.
   const uint64_t messages = vk::validation_message_count() - messages_before;

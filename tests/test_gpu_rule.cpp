@@ -16,7 +16,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -96,61 +95,6 @@ EdgeMove decide_unfloored(float d_lp, float d_lq, float d_rp, float d_rq, float 
   return both_in_p < both_in_q ? EdgeMove::right_to_p : EdgeMove::left_to_q;
 }
 
-// Cases in the ranges the engine sees (normalized coordinates in [0, 1], weights are face areas in
-// those units), placed on the roundings:
-//  - p and g differing by 2^-24..1 per coordinate, so that the three squares span many binades
-//    and the order of their sum matters;
-//  - case 4 of the rule with the two weighted sums equal to within a few ulps (the exact tie
-//    solved in double, then stepped ulp by ulp), and the exact ties of cases 1-3 (d_lp == d_lq,
-//    d_rp == d_rq);
-//  - destinations at equal distances with either cluster id lower;
-//  - tiny faces and generators close to a face near the box's corner (2^-60..2^-80 apart,
-//    weights down to 2^-110):
-//    squares and products below 2^-126, where a device that flushes subnormals gives zero.
-std::vector<vk::RuleCase> make_cases(bool subnormal) {
-  std::mt19937_64 rng(subnormal ? 20261128 : 1128);
-  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-  std::uniform_int_distribution<int> coin(0, 1);
-  auto scaled = [&](int low_exponent, int high_exponent) {  // a value with a random binade in the range
-    std::uniform_int_distribution<int> e(low_exponent, high_exponent);
-    return std::ldexp(0.5f + 0.5f * unit(rng), e(rng));
-  };
-  std::vector<vk::RuleCase> cases;
-  for (int i = 0; i < 1 << 15; ++i) {
-    vk::RuleCase c;
-    for (int k = 0; k < 3; ++k) {
-      // (Subnormal squares need p and g near 0: a corner of the normalized bounding box.)
-      // (Every fourth case: a subnormal coordinate and weight, which a device may read as zero.)
-      c.p[k] = !subnormal ? unit(rng) : i % 4 == 0 ? scaled(-140, -127) : scaled(-70, -50);
-      const float delta = subnormal ? scaled(-80, -60) : scaled(-24, 0);
-      c.g[k] = coin(rng) ? c.p[k] + delta : c.p[k] - delta;
-    }
-    // Case 4 near a tie: d_lp > d_lq and d_rp < d_rq, both_in_p == both_in_q within ulps.
-    c.w_l = !subnormal ? scaled(-30, -1) : i % 4 == 0 ? scaled(-140, -127) : scaled(-110, -90);
-    c.w_r = subnormal ? scaled(-110, -90) : scaled(-30, -1);
-    c.d_lq = subnormal ? scaled(-40, -20) : scaled(-20, 0);
-    c.d_lp = c.d_lq * (1.0f + unit(rng));
-    c.d_rq = float((double(c.d_lp) - c.d_lq) * c.w_l / c.w_r) * (1.5f + unit(rng));
-    float tie = float((double(c.d_lq) * c.w_l + double(c.d_rq) * c.w_r - double(c.d_lp) * c.w_l) / c.w_r);
-    for (int steps = i % 9 - 4; steps != 0; steps += steps > 0 ? -1 : 1)
-      tie = std::nextafter(tie, steps > 0 ? INFINITY : 0.0f);
-    c.d_rp = tie;
-    // Every eighth case: the exact ties of cases 1-3 instead.
-    if (i % 8 == 7) {
-      const int which = int(rng() % 3);  // 0: case 2, 1: case 3, 2: case 1
-      if (which != 1) c.d_lp = c.d_lq;
-      if (which != 0) c.d_rp = c.d_rq;
-    }
-    // Destinations: equal distances half the time.
-    c.d = unit(rng);
-    c.best_d = coin(rng) ? c.d : std::nextafter(c.d, coin(rng) ? 2.0f : 0.0f);
-    c.c = uint32_t(rng() % 1000);
-    c.best_c = uint32_t(rng() % 1000);
-    cases.push_back(c);
-  }
-  return cases;
-}
-
 // Runs the cases on the device and checks every result against the rule; returns how many of
 // them tell the rule apart from each careless variant (reordered, fused), and how many reach the
 // subnormals (the rule without its floor gives another result when subnormals are flushed).
@@ -207,7 +151,7 @@ Power check_on_device(const std::vector<vk::RuleCase>& cases) {
 
 TEST_CASE("gpu: the boundary rule on the device equals src/boundary_rule.h bit for bit" *
           doctest::skip(skip_gpu_tests())) {
-  const std::vector<vk::RuleCase> cases = make_cases(false);
+  const std::vector<vk::RuleCase> cases = vk::boundary_rule_cases(false);
   const Power power = check_on_device(cases);
   // The cases can tell: a shader that reorders the sum or fuses a multiply-add would fail many.
   MESSAGE("cases that tell the rule from a reordered sum: " << power.reordered << ", from fused multiply-adds: "
@@ -229,11 +173,39 @@ TEST_CASE("gpu: the boundary rule on the device equals src/boundary_rule.h bit f
 
 TEST_CASE("gpu: the boundary rule gives the CPU's results where distances and weighted sums are subnormal" *
           doctest::skip(skip_gpu_tests())) {
-  const std::vector<vk::RuleCase> cases = make_cases(true);
+  const std::vector<vk::RuleCase> cases = vk::boundary_rule_cases(true);
   const Power power = check_on_device(cases);
   // The cases reach the subnormals: without the floor, a device that flushes them would give
   // other results on many (NVIDIA did, on 29514 distances and 4324 decisions of these).
   MESSAGE("cases whose unfloored results change when subnormals are flushed: " << power.subnormal << " of "
                                                                                 << cases.size());
   CHECK(power.subnormal > 1000);
+}
+
+TEST_CASE("gpu: check_boundary_rule (the device self-test) passes on the device, and names a difference") {
+  // The comparison itself, without a device: a result changed in its last bit is named.
+  const std::vector<vk::RuleCase> cases = vk::boundary_rule_cases(false);
+  std::vector<vk::RuleResult> results(cases.size());
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const vk::RuleCase& c = cases[i];
+    results[i].squared_distance = squared_distance(c.p, c.g);
+    results[i].edge_move = uint32_t(decide_cluster_edge(c.d_lp, c.d_lq, c.d_rp, c.d_rq, c.w_l, c.w_r));
+    results[i].better = better_destination(c.d, c.c, c.best_d, c.best_c) ? 1 : 0;
+  }
+  CHECK(vk::rule_differences(cases, results).empty());
+  results[5].squared_distance = std::nextafter(results[5].squared_distance, INFINITY);
+  results[9].edge_move ^= 3;
+  const std::string named = vk::rule_differences(cases, results);
+  CAPTURE(named);
+  CHECK(named.find("2 of 32768 cases differ") == 0);
+  CHECK(named.find("case 5: squared_distance") != std::string::npos);
+  CHECK(vk::rule_differences(cases, std::span<const vk::RuleResult>(results).first(7)).find("7 results") == 0);
+  if (skip_gpu_tests()) return;
+  // On the device, as `meshcvt devices --check` runs it.
+  const uint64_t messages = vk::validation_message_count();
+  {
+    vk::Context context(gpu_device());
+    CHECK_NOTHROW(vk::check_boundary_rule(context));
+  }
+  CHECK(vk::validation_message_count() == messages);
 }

@@ -149,7 +149,8 @@ const RegisterCommand reg(90, [](CLI::App& app) {
   CLI::App* sub = app.add_subcommand("devices", "List Vulkan compute devices and whether meshcvt can use them");
   sub->add_flag("--json", options.json, "Print JSON instead of text");
   sub->add_flag("--check", options.check,
-                "Run the GPU self-test (64-bit atomics through buffer device addresses) on every usable device");
+                "Run the GPU self-test on every usable device: 64-bit atomics through buffer device addresses, and "
+                "the boundary rule bit for bit against the CPU engine's");
   sub->callback([] { run(options); });
 });
 

@@ -91,9 +91,11 @@ DeviceChoice resolve_device(const std::string& request, const std::vector<Device
 
 /// Runs a small compute self-test on Vulkan device `index`: 64-bit integer atomics through buffer
 /// device addresses, across several dispatches separated by barriers, with the sums checked exactly
-/// on the host. Returns the seconds it took (device setup included). Throws DeviceError when the
-/// device cannot be opened, computes a wrong result (the message names expected and actual values),
-/// or, with MESHCVT_VALIDATION=1, when the validation layer reported any message meanwhile.
+/// on the host; then the boundary rule's shader on 65536 cases placed on roundings and subnormals,
+/// every result compared bit for bit with the CPU engine's rule (what makes the GPU engine's labels
+/// the CPU engine's). Returns the seconds it took (device setup included). Throws DeviceError when
+/// the device cannot be opened, computes a wrong result (the message names expected and actual
+/// values), or, with MESHCVT_VALIDATION=1, when the validation layer reported any message meanwhile.
 double self_test_device(uint32_t index);
 
 }  // namespace meshcvt
