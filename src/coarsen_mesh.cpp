@@ -2093,7 +2093,12 @@ CoarsenMeshResult coarsen_without_collapsed_faces(const Mesh& mesh, const Topolo
 
 }  // namespace
 
-CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const CoarsenMeshOptions& options) {
+CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const CoarsenMeshOptions& given) {
+  // While fixing, qem's degenerate triangles stay defects: the fix rounds may find a clustering
+  // whose points are apart (a cube keeps its corners so). Only the last dual, where they remain,
+  // puts their clusters' points on the surface (CoarsenOptions::degenerate_to_surface).
+  CoarsenMeshOptions options = given;
+  options.coarsen.degenerate_to_surface = false;
   if (!options.cluster.component_clusters.empty() || !options.cluster.initial_labels.empty())
     throw OptionError("coarsen_mesh sets component_clusters and initial_labels itself: leave them empty");
   // Options coarsen_clustering and relax would refuse, refused before the clustering's work.
@@ -2106,7 +2111,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
   // holding one is no disk. They are left out of the whole job, and afterwards take the cluster
   // of a face sharing a corner with them. Unless every face is collapsed (nothing else to keep).
   if (topology.collapsed_faces > 0 && topology.collapsed_faces < mesh.face_count())
-    return coarsen_without_collapsed_faces(mesh, topology, options);
+    return coarsen_without_collapsed_faces(mesh, topology, given);
   // A surface that is a manifold but for pinched vertices (cow: two parts touching at a point) or
   // whose triangles are ordered at random (boeing, the *-shuffled meshes of libcgal-demo) has a
   // dual that is pinched too, or whose triangles face every way: prepare a copy first. The labels
@@ -2116,7 +2121,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
     Topology prepared_topology = topology;
     const SurfacePreparation p = prepare_surface(prepared, prepared_topology);
     if (p.split_vertices > 0 || p.flipped_faces > 0) {
-      CoarsenMeshResult out = coarsen_mesh(prepared, prepared_topology, options);
+      CoarsenMeshResult out = coarsen_mesh(prepared, prepared_topology, given);
       out.split_vertices = p.split_vertices;
       out.reoriented_faces = p.flipped_faces;
       return out;
@@ -2365,6 +2370,14 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
     t = Clock::now();
     out.coarse = coarsen_clustering(mesh, topology, clustering.labels, n, options.coarsen, weights);
     out.coarsen_seconds = seconds_since(t);
+  }
+  if (given.coarsen.degenerate_to_surface && given.coarsen.placement == VertexPlacement::qem &&
+      !out.coarse.defects.empty() &&
+      std::all_of(out.coarse.defects.begin(), out.coarse.defects.end(),
+                  [](const DualDefect& d) { return d.kind == DualDefect::degenerate_triangle; })) {
+    t = Clock::now();
+    out.coarse = coarsen_clustering(mesh, topology, clustering.labels, n, given.coarsen, weights);
+    out.coarsen_seconds += seconds_since(t);
   }
   out.defects_remain = !out.coarse.defects.empty();
   out.clustering = std::move(clustering);

@@ -850,6 +850,51 @@ TEST_CASE("coarsen: qem points pulled onto one line keep their own planes where 
   CHECK(kept_own);
 }
 
+TEST_CASE("coarsen: qem points left on one line by their own planes take their projected points") {
+  // An 8 x 6 grid folded up along x = 4 (cells i < 4 floor, i >= 4 wall). Clusters A (0), B (1)
+  // and C (2) each hold cells on both sides of the crease, so their own planes, not only the lent
+  // ones, put their points on the crease line; they meet at (3, 4), so the triangle of A, B and C
+  // has no area. (A mesh midpoint-subdivided before the clustering is full of such straight
+  // creases: the armadillo -> 52000 and boeing -> 2564 with qem kept such triangles, and with
+  // them no relax, flips or fitting at all.) D (3) and E (4) are floor and wall, F (5) the wall
+  // cells right of B.
+  Labeled g = grid(8, 6, [](int i, int j) {
+    if (i < 2) return 3u;
+    if (i >= 6) return 4u;
+    if (j < 2) return 0u;
+    if (j >= 4) return 2u;
+    return i == 2 ? 0u : i == 5 ? 5u : 1u;
+  });
+  for (size_t v = 0; v < g.mesh.vertex_count(); ++v) {
+    float* p = &g.mesh.positions[3 * v];
+    if (p[0] > 4) p[2] = p[0] - 4, p[0] = 4;
+  }
+  CoarsenOptions options;
+  options.placement = VertexPlacement::qem;
+  CoarsenResult r = coarsen_clustering(g.mesh, build_topology(g.mesh), g.labels, 6, options);
+  CHECK(r.defects.empty());
+  CHECK(inspect(r.mesh).degenerate == 0);
+  CHECK(r.relaxed_moves + r.fitted_moves > 0);  // the finishing passes ran
+  CHECK(r.surface_points == 1);  // of the three, one point leaves the crease
+  // Off, the triangle is a defect, as coarsen_mesh's fix rounds want it.
+  options.degenerate_to_surface = false;
+  CoarsenResult kept = coarsen_clustering(g.mesh, build_topology(g.mesh), g.labels, 6, options);
+  CHECK(kept.defects.size() == 1);
+  CHECK(kept.surface_points == 0);
+  // The points as placed (no flips, relax or fitting after): of A, B and C, two keep their
+  // points on the crease line, one stands on the surface beside it.
+  CoarsenOptions placed;
+  placed.placement = VertexPlacement::qem;
+  placed.relax_passes = placed.fit_passes = 0;
+  placed.fit_min_angle_deg = 0;
+  placed.flip_edges = false;
+  CoarsenResult p = coarsen_clustering(g.mesh, build_topology(g.mesh), g.labels, 6, placed);
+  CHECK(p.surface_points == 1);
+  int on_crease = 0;
+  for (uint32_t c : {0u, 1u, 2u}) on_crease += std::hypot(p.mesh.positions[3 * c] - 4.0, p.mesh.positions[3 * c + 2]) < 1e-3;
+  CHECK(on_crease == 2);
+}
+
 TEST_CASE("coarsen: qem's edge swaps bring a cube's coarse mesh closer, keeping it a closed manifold") {
   // A CVT clustering does not follow a cube's edges: some dual edges cut across them. Swapping
   // those for the other diagonal lowers the distance to the cube.

@@ -308,7 +308,8 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("fit_passes", a.fit_passes).value("fitted_moves", r.fitted_moves)
         .value("fit_swaps", co.fit_swaps).value("fit_swap_min_angle_deg", co.fit_swap_min_angle_deg)
         .value("swapped_edges", r.swapped_edges).value("unfolded_vertices", r.unfolded_vertices)
-        .value("fit_min_angle_deg", co.fit_min_angle_deg).value("angle_floor_moves", r.angle_floor_moves);
+        .value("fit_min_angle_deg", co.fit_min_angle_deg).value("angle_floor_moves", r.angle_floor_moves)
+        .value("surface_points", r.surface_points);
     j.begin_array("jobs");
     for (const CoarsenSurfaceJob& sj : result.jobs)
       j.begin_object().value("surface", to_string(sj.surface)).value("defects", uint64_t(sj.defects))

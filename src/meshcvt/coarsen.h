@@ -114,6 +114,14 @@ struct CoarsenOptions {
   /// meshes rose from 2.4-12.3 degrees to 19.4-20.3 (the sphere's 45.1 unchanged), RMS distance
   /// at most 0.5% higher.
   double fit_min_angle_deg = 20;
+  /// `qem` only: where three clusters' points lie on one line (or coincide) even with only their
+  /// own faces' planes, as along the straight creases of a mesh midpoint-subdivided before the
+  /// clustering, those clusters take their `projected` points (on the surface) instead, so that
+  /// the triangle has an area. Off: the triangle is reported (DualDefect::degenerate_triangle),
+  /// and the relax, flips and fitting skip the whole mesh. coarsen_mesh turns it off while it
+  /// fixes the clustering (its rounds may find one whose points are apart: the cube of
+  /// tests/test_coarsen.cpp, whose corners they keep) and uses it for its last dual.
+  bool degenerate_to_surface = true;
 };
 
 /// Something in a clustering that makes its dual mesh non-manifold or degenerate. `cluster`,
@@ -179,6 +187,9 @@ struct CoarsenResult {
   /// qem only: vertex moves toward the projected points that lifted thin triangles
   /// (CoarsenOptions::fit_min_angle_deg).
   uint64_t angle_floor_moves = 0;
+  /// qem only: clusters given their projected points because their triangle had no area even with
+  /// their own planes (CoarsenOptions::degenerate_to_surface).
+  uint64_t surface_points = 0;
 };
 
 /// Builds the dual mesh of a face clustering.
