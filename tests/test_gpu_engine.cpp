@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "cluster_engine.h"
+#include "gpu_test_device.h"
 #include "meshcvt/cluster.h"
 #include "meshcvt/density.h"
 #include "meshcvt/device.h"
@@ -29,26 +30,6 @@
 using namespace meshcvt;
 
 namespace {
-
-bool skip_gpu_tests() {
-  const char* value = std::getenv("MESHCVT_SKIP_GPU_TESTS");
-  return value && std::strcmp(value, "1") == 0;
-}
-
-// The device the tests run on: the one "gpu" picks (lavapipe on CI).
-int gpu_device() {
-  std::vector<DeviceInfo> devices;
-  try {
-    devices = list_devices();
-  } catch (const DeviceError& e) {
-    FAIL("GPU tests need a Vulkan device (" << e.what() << "); or set MESHCVT_SKIP_GPU_TESTS=1");
-  }
-  if (devices.empty())
-    FAIL("GPU tests need a Vulkan device: install mesa-vulkan-drivers (lavapipe), or set MESHCVT_SKIP_GPU_TESTS=1");
-  DeviceChoice choice = resolve_device("gpu", devices);
-  REQUIRE(choice.use_gpu);
-  return choice.device_index;
-}
 
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
@@ -140,8 +121,8 @@ uint64_t compare_engines(const Mesh& mesh, const Topology& topology, Metric metr
 // Every metric x cluster counts {2, 17, 200, F/4} (those the mesh can take) in preserving mode; the
 // paper's mode for 17 and F/4 (keeps the suite fast on lavapipe).
 void compare_on_mesh(const NamedMesh& m) {
-  if (skip_gpu_tests()) return;
-  const int device = gpu_device();
+  if (test::skip_gpu_tests()) return;
+  const int device = int(test::gpu_test_device());
   const uint64_t messages_before = vk::validation_message_count();
   Topology topology = build_topology(m.mesh);
   uint32_t components = 0;
@@ -182,8 +163,8 @@ TEST_CASE("gpu engine equals the CPU engine: scanned elephant") {
 }
 
 TEST_CASE("gpu engine: without the accelerator, and on vertex rings beyond 64 faces") {
-  if (skip_gpu_tests()) return;
-  const int device = gpu_device();
+  if (test::skip_gpu_tests()) return;
+  const int device = int(test::gpu_test_device());
   const uint64_t messages_before = vk::validation_message_count();
   {
     Mesh m = test::torus(30, 14);
@@ -205,8 +186,8 @@ TEST_CASE("gpu engine: without the accelerator, and on vertex rings beyond 64 fa
 }
 
 TEST_CASE("gpu engine: cluster() with device \"gpu\" equals device \"cpu\" end to end") {
-  if (skip_gpu_tests()) return;
-  gpu_device();
+  if (test::skip_gpu_tests()) return;
+  int(test::gpu_test_device());
   const uint64_t messages_before = vk::validation_message_count();
   Mesh elephant = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
   // --gradation's density: face weights of 1 to 256 (and the initialization weighs its merges by it).
@@ -253,8 +234,8 @@ TEST_CASE("gpu engine: cluster() with device \"gpu\" equals device \"cpu\" end t
   CHECK(vk::validation_message_count() == messages_before);
 }
 
-TEST_CASE("gpu engine: kernel timing counts every boundary dispatch" * doctest::skip(skip_gpu_tests())) {
-  const int device = gpu_device();
+TEST_CASE("gpu engine: kernel timing counts every boundary dispatch" * doctest::skip(test::skip_gpu_tests())) {
+  const int device = int(test::gpu_test_device());
   Mesh mesh = test::icosphere(3);
   Topology topology = build_topology(mesh);
   ClusterOptions options;
@@ -287,7 +268,7 @@ TEST_CASE("gpu engine: kernel timing counts every boundary dispatch" * doctest::
 }
 
 TEST_CASE("gpu engine: a bad device index is a DeviceError") {
-  if (skip_gpu_tests()) return;
+  if (test::skip_gpu_tests()) return;
   Mesh m = test::icosphere(1);
   Topology t = build_topology(m);
   ClusterOptions o;

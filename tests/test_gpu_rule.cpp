@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "boundary_rule.h"
+#include "gpu_test_device.h"
 #include "meshcvt/device.h"
 #include "meshcvt/error.h"
 #include "vk_context.h"
@@ -28,25 +29,6 @@
 using namespace meshcvt;
 
 namespace {
-
-bool skip_gpu_tests() {
-  const char* value = std::getenv("MESHCVT_SKIP_GPU_TESTS");
-  return value && std::strcmp(value, "1") == 0;
-}
-
-uint32_t gpu_device() {
-  std::vector<DeviceInfo> devices;
-  try {
-    devices = list_devices();
-  } catch (const DeviceError& e) {
-    FAIL("GPU tests need a Vulkan device (" << e.what() << "); or set MESHCVT_SKIP_GPU_TESTS=1");
-  }
-  if (devices.empty())
-    FAIL("GPU tests need a Vulkan device: install mesa-vulkan-drivers (lavapipe), or set MESHCVT_SKIP_GPU_TESTS=1");
-  DeviceChoice choice = resolve_device("gpu", devices);
-  REQUIRE(choice.use_gpu);
-  return static_cast<uint32_t>(choice.device_index);
-}
 
 std::string show(float x) {
   char text[32];
@@ -105,7 +87,7 @@ Power check_on_device(const std::vector<vk::RuleCase>& cases) {
   const uint64_t messages = vk::validation_message_count();
   std::vector<vk::RuleResult> results;
   {
-    vk::Context context(gpu_device());
+    vk::Context context(test::gpu_test_device());
     results = vk::evaluate_boundary_rule(context, cases);
     VkPhysicalDeviceFloatControlsProperties controls{};
     controls.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FLOAT_CONTROLS_PROPERTIES;
@@ -150,7 +132,7 @@ Power check_on_device(const std::vector<vk::RuleCase>& cases) {
 }  // namespace
 
 TEST_CASE("gpu: the boundary rule on the device equals src/boundary_rule.h bit for bit" *
-          doctest::skip(skip_gpu_tests())) {
+          doctest::skip(test::skip_gpu_tests())) {
   const std::vector<vk::RuleCase> cases = vk::boundary_rule_cases(false);
   const Power power = check_on_device(cases);
   // The cases can tell: a shader that reorders the sum or fuses a multiply-add would fail many.
@@ -172,7 +154,7 @@ TEST_CASE("gpu: the boundary rule on the device equals src/boundary_rule.h bit f
 }
 
 TEST_CASE("gpu: the boundary rule gives the CPU's results where distances and weighted sums are subnormal" *
-          doctest::skip(skip_gpu_tests())) {
+          doctest::skip(test::skip_gpu_tests())) {
   const std::vector<vk::RuleCase> cases = vk::boundary_rule_cases(true);
   const Power power = check_on_device(cases);
   // The cases reach the subnormals: without the floor, a device that flushes them would give
@@ -200,11 +182,11 @@ TEST_CASE("gpu: check_boundary_rule (the device self-test) passes on the device,
   CHECK(named.find("2 of 32768 cases differ") == 0);
   CHECK(named.find("case 5: squared_distance") != std::string::npos);
   CHECK(vk::rule_differences(cases, std::span<const vk::RuleResult>(results).first(7)).find("7 results") == 0);
-  if (skip_gpu_tests()) return;
+  if (test::skip_gpu_tests()) return;
   // On the device, as `meshcvt devices --check` runs it.
   const uint64_t messages = vk::validation_message_count();
   {
-    vk::Context context(gpu_device());
+    vk::Context context(test::gpu_test_device());
     CHECK_NOTHROW(vk::check_boundary_rule(context));
   }
   CHECK(vk::validation_message_count() == messages);

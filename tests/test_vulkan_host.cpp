@@ -19,6 +19,7 @@
 
 #include "meshcvt/device.h"
 #include "meshcvt/error.h"
+#include "gpu_test_device.h"
 #include "vk_buffer.h"
 #include "vk_context.h"
 #include "vk_errors.h"
@@ -29,26 +30,6 @@
 using namespace meshcvt;
 
 namespace {
-
-bool skip_gpu_tests() {
-  const char* value = std::getenv("MESHCVT_SKIP_GPU_TESTS");
-  return value && std::strcmp(value, "1") == 0;
-}
-
-// The device GPU tests run on: the one "gpu" picks (lavapipe on CI).
-uint32_t test_device() {
-  std::vector<DeviceInfo> devices;
-  try {
-    devices = list_devices();
-  } catch (const DeviceError& e) {
-    FAIL("GPU tests need a Vulkan device (" << e.what() << "); or set MESHCVT_SKIP_GPU_TESTS=1");
-  }
-  if (devices.empty())
-    FAIL("GPU tests need a Vulkan device: install mesa-vulkan-drivers (lavapipe), or set MESHCVT_SKIP_GPU_TESTS=1");
-  DeviceChoice choice = resolve_device("gpu", devices);
-  REQUIRE(choice.use_gpu);
-  return static_cast<uint32_t>(choice.device_index);
-}
 
 // Sets an environment variable for one scope and restores it after.
 class ScopedEnv {
@@ -256,8 +237,8 @@ TEST_CASE("resolve_device: ranking and auto fallback") {
 
 // ---- on a device
 
-TEST_CASE("vk: list_devices describes the devices" * doctest::skip(skip_gpu_tests())) {
-  const uint32_t index = test_device();
+TEST_CASE("vk: list_devices describes the devices" * doctest::skip(test::skip_gpu_tests())) {
+  const uint32_t index = test::gpu_test_device();
   std::vector<DeviceInfo> devices = list_devices();
   REQUIRE(index < devices.size());
   for (uint32_t i = 0; i < devices.size(); ++i) {
@@ -284,8 +265,8 @@ TEST_CASE("vk: list_devices describes the devices" * doctest::skip(skip_gpu_test
   CHECK(error_text([] { resolve_device("gpu:99"); }).find("gpu:99") != std::string::npos);
 }
 
-TEST_CASE("vk: self-test of int64 atomics through buffer device addresses" * doctest::skip(skip_gpu_tests())) {
-  const uint32_t index = test_device();
+TEST_CASE("vk: self-test of int64 atomics through buffer device addresses" * doctest::skip(test::skip_gpu_tests())) {
+  const uint32_t index = test::gpu_test_device();
   const uint64_t messages = vk::validation_message_count();
   {
     vk::Context context(index);
@@ -307,8 +288,8 @@ TEST_CASE("vk: self-test of int64 atomics through buffer device addresses" * doc
 }
 
 TEST_CASE("vk: a buffer larger than maxStorageBufferRange is addressed through its device address" *
-          doctest::skip(skip_gpu_tests())) {
-  const uint32_t index = test_device();
+          doctest::skip(test::skip_gpu_tests())) {
+  const uint32_t index = test::gpu_test_device();
   const uint64_t messages = vk::validation_message_count();
   {
     vk::Context context(index);
@@ -347,8 +328,8 @@ TEST_CASE("vk: a buffer larger than maxStorageBufferRange is addressed through i
   CHECK(vk::validation_message_count() == messages);
 }
 
-TEST_CASE("vk: the memory budget check refuses an allocation that cannot fit" * doctest::skip(skip_gpu_tests())) {
-  const uint32_t index = test_device();
+TEST_CASE("vk: the memory budget check refuses an allocation that cannot fit" * doctest::skip(test::skip_gpu_tests())) {
+  const uint32_t index = test::gpu_test_device();
   const uint64_t messages = vk::validation_message_count();
   {
     vk::Context context(index);
@@ -379,8 +360,8 @@ TEST_CASE("vk: the memory budget check refuses an allocation that cannot fit" * 
   CHECK(vk::validation_message_count() == messages);
 }
 
-TEST_CASE("vk: uploads and downloads, mapped and through staging copies" * doctest::skip(skip_gpu_tests())) {
-  const uint32_t index = test_device();
+TEST_CASE("vk: uploads and downloads, mapped and through staging copies" * doctest::skip(test::skip_gpu_tests())) {
+  const uint32_t index = test::gpu_test_device();
   const uint64_t messages = vk::validation_message_count();
   {
     vk::Context context(index);
@@ -414,8 +395,8 @@ TEST_CASE("vk: uploads and downloads, mapped and through staging copies" * docte
   CHECK(vk::validation_message_count() == messages);
 }
 
-TEST_CASE("vk: a marker lets the host read a counter before the sequence ends" * doctest::skip(skip_gpu_tests())) {
-  const uint32_t index = test_device();
+TEST_CASE("vk: a marker lets the host read a counter before the sequence ends" * doctest::skip(test::skip_gpu_tests())) {
+  const uint32_t index = test::gpu_test_device();
   const uint64_t messages = vk::validation_message_count();
   {
     vk::Context context(index);
@@ -459,8 +440,8 @@ TEST_CASE("vk: a marker lets the host read a counter before the sequence ends" *
   CHECK(vk::validation_message_count() == messages);
 }
 
-TEST_CASE("vk: timestamps measure the work between them" * doctest::skip(skip_gpu_tests())) {
-  const uint32_t index = test_device();
+TEST_CASE("vk: timestamps measure the work between them" * doctest::skip(test::skip_gpu_tests())) {
+  const uint32_t index = test::gpu_test_device();
   const uint64_t messages = vk::validation_message_count();
   {
     vk::Context context(index);
@@ -490,8 +471,8 @@ TEST_CASE("vk: timestamps measure the work between them" * doctest::skip(skip_gp
   CHECK(vk::validation_message_count() == messages);
 }
 
-TEST_CASE("vk: a wait that times out fails the context instead of hanging" * doctest::skip(skip_gpu_tests())) {
-  const uint32_t index = test_device();
+TEST_CASE("vk: a wait that times out fails the context instead of hanging" * doctest::skip(test::skip_gpu_tests())) {
+  const uint32_t index = test::gpu_test_device();
   const uint64_t messages = vk::validation_message_count();
   {
     vk::ContextOptions options;
@@ -515,8 +496,8 @@ TEST_CASE("vk: a wait that times out fails the context instead of hanging" * doc
   CHECK(vk::validation_message_count() == messages);
 }
 
-TEST_CASE("vk: pipeline limits are checked before the driver sees them" * doctest::skip(skip_gpu_tests())) {
-  const uint32_t index = test_device();
+TEST_CASE("vk: pipeline limits are checked before the driver sees them" * doctest::skip(test::skip_gpu_tests())) {
+  const uint32_t index = test::gpu_test_device();
   vk::Context context(index);
   const uint32_t too_many = context.limits().maxPushConstantsSize + 4;
   CHECK_THROWS_AS(vk::ComputePipeline(context, vk::self_test_spirv(), "selftest", too_many, 64), DeviceError);
@@ -532,8 +513,8 @@ TEST_CASE("vk: pipeline limits are checked before the driver sees them" * doctes
                   DeviceError);
 }
 
-TEST_CASE("vk: validation asked for without the layer installed is an error" * doctest::skip(skip_gpu_tests())) {
-  test_device();
+TEST_CASE("vk: validation asked for without the layer installed is an error" * doctest::skip(test::skip_gpu_tests())) {
+  test::gpu_test_device();
   // The loader looks for explicit layers only in VK_LAYER_PATH when it is set.
   ScopedEnv no_layers("VK_LAYER_PATH", "/nonexistent-meshcvt-layer-path");
   ScopedEnv no_extra("VK_ADD_LAYER_PATH", nullptr);
@@ -544,8 +525,8 @@ TEST_CASE("vk: validation asked for without the layer installed is an error" * d
   CHECK_NOTHROW(vk::Instance(false));
 }
 
-TEST_CASE("vk: the validation messenger counts misuse" * doctest::skip(skip_gpu_tests())) {
-  const uint32_t index = test_device();
+TEST_CASE("vk: the validation messenger counts misuse" * doctest::skip(test::skip_gpu_tests())) {
+  const uint32_t index = test::gpu_test_device();
   vk::ContextOptions options;
   options.validation = true;  // whatever MESHCVT_VALIDATION says: this test is about the messenger
   vk::Context context(index, options);
@@ -568,8 +549,8 @@ TEST_CASE("vk: the validation messenger counts misuse" * doctest::skip(skip_gpu_
   CHECK(target.mapped_as<uint32_t>()[0] == 2u);
 }
 
-TEST_CASE("vk: Context checks the device index and the timeout setting" * doctest::skip(skip_gpu_tests())) {
-  const uint32_t index = test_device();
+TEST_CASE("vk: Context checks the device index and the timeout setting" * doctest::skip(test::skip_gpu_tests())) {
+  const uint32_t index = test::gpu_test_device();
   const std::string missing = error_text([] { vk::Context context(9999); });
   CHECK(missing.find("gpu:9999") != std::string::npos);
   CHECK(missing.find("no such Vulkan device") != std::string::npos);
