@@ -13,7 +13,11 @@
 # - the report counts the qem points moved to unfold triangles (unfolded_vertices; 0 for projected);
 # - --fit-min-angle 0 turns the widening of thin triangles off (angle_floor_moves 0) and leaves
 #   the smallest angle no larger than the default 20 does; the report names the floor;
-# - a bad --fit-passes, --fit-swap-angle or --fit-min-angle exits 2 and writes nothing.
+# - a bad --fit-passes, --fit-swap-angle or --fit-min-angle exits 2 and writes nothing;
+# - -n 4500 --subdivide 2 leaves dual triangles of no area (clusters straddling the subdivided
+#   input's straight edges, whose points lie on one line even with their own planes): a cluster of
+#   each takes its projected point (surface_points in the report), so no defect remains and relax
+#   runs (before, 4 defects remained, no relax, Q avg 0.66).
 # usage: coarsen_qem.sh /path/to/meshcvt /path/to/tests/data
 set -euo pipefail
 cli=$1
@@ -104,4 +108,17 @@ grep -q "^meshcvt: note: .*elephant.off: --vertex qem with n = 2775, not below t
 "$cli" coarsen "$data/elephant.off" -n 2774 --vertex qem --subdivide 0 -o "$tmp/fine.off" --no-error \
   >"$tmp/out" 2>"$tmp/err" || fail "qem -> 2774: $(cat "$tmp/err")"
 grep -q "not below the input" "$tmp/err" && fail "qem -> 2774: note: $(cat "$tmp/err")"
+# Degenerate triangles left by the fix rounds: one cluster's point goes to the surface.
+"$cli" coarsen "$data/elephant.off" -n 4500 --subdivide 2 --vertex qem -o "$tmp/straddle.off" --no-error \
+  --report "$tmp/straddle.json" >"$tmp/out" 2>"$tmp/err" || fail "qem -> 4500: $(cat "$tmp/err")"
+grep -q "defects remain" "$tmp/err" && fail "qem -> 4500: defects remain: $(cat "$tmp/err")"
+python3 - "$tmp/straddle.json" <<'PY' || fail "qem -> 4500: report check failed"
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r["subdivision_levels"] == 2, r["subdivision_levels"]
+assert r["fix_loop"]["initial_defects"] > 0, "the case no longer starts with degenerate triangles"
+assert r["defects"] == [] and r["output"]["vertices"] == 4500, (r["defects"], r["output"])
+assert r["surface_points"] > 0 and r["relaxed_moves"] > 0, (r["surface_points"], r["relaxed_moves"])
+assert r["quality"]["q_avg"] > 0.75, r["quality"]
+PY
 echo ok
