@@ -13,7 +13,6 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <string>
@@ -29,12 +28,6 @@
 using namespace meshcvt;
 
 namespace {
-
-std::string show(float x) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.9g", double(x));
-  return text;
-}
 
 uint32_t bits(float x) {
   uint32_t b;
@@ -101,20 +94,13 @@ Power check_on_device(const std::vector<vk::RuleCase>& cases) {
   }
   CHECK(vk::validation_message_count() == messages);
   REQUIRE(results.size() == cases.size());
+  // Equal on the device, bit for bit (rule_differences names the first difference).
+  const std::string differences = vk::rule_differences(cases, results);
+  CHECK_MESSAGE(differences.empty(), differences);
   Power power;
-  int wrong_distance = 0, wrong_edge = 0, wrong_destination = 0;
-  for (size_t i = 0; i < cases.size(); ++i) {
-    const vk::RuleCase& c = cases[i];
+  for (const vk::RuleCase& c : cases) {
     const float d = squared_distance(c.p, c.g);
     const EdgeMove edge = decide_cluster_edge(c.d_lp, c.d_lq, c.d_rp, c.d_rq, c.w_l, c.w_r);
-    const bool better = better_destination(c.d, c.c, c.best_d, c.best_c);
-    if (bits(results[i].squared_distance) != bits(d) && wrong_distance++ == 0)
-      MESSAGE("case " << i << ": squared_distance " << show(results[i].squared_distance) << " on the device, "
-                      << show(d) << " on the CPU");
-    if (results[i].edge_move != uint32_t(edge) && wrong_edge++ == 0)
-      MESSAGE("case " << i << ": decide_cluster_edge " << results[i].edge_move << " on the device, "
-                      << uint32_t(edge) << " on the CPU");
-    if (results[i].better != uint32_t(better)) ++wrong_destination;
     power.reordered += bits(squared_distance_reordered(c.p, c.g)) != bits(d);
     power.fused += bits(squared_distance_fused(c.p, c.g)) != bits(d) ||
                    decide_fused(c.d_lp, c.d_lq, c.d_rp, c.d_rq, c.w_l, c.w_r) != edge;
@@ -123,9 +109,6 @@ Power check_on_device(const std::vector<vk::RuleCase>& cases) {
         decide_unfloored(c.d_lp, c.d_lq, c.d_rp, c.d_rq, c.w_l, c.w_r, false) !=
             decide_unfloored(c.d_lp, c.d_lq, c.d_rp, c.d_rq, c.w_l, c.w_r, true);
   }
-  CHECK(wrong_distance == 0);
-  CHECK(wrong_edge == 0);
-  CHECK(wrong_destination == 0);
   return power;
 }
 
