@@ -2183,7 +2183,17 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
     };
     std::vector<FineStart> fine_starts;
     std::vector<uint32_t> best_fine(topology.component_count, kNone), best_fine_defects(topology.component_count, 0);
-    for (uint64_t factor = 2; any(broken_manifolds(result.labels, n, result.defects)) && factor <= 32; factor *= 2) {
+    // Dual triangles of no area alone (qem points on one line) are no reason to cluster a whole
+    // component again at 2n, 4n, ...: the last dual puts one point of each on the surface
+    // (CoarsenOptions::degenerate_to_surface). The armadillo -> 52000 with qem spent 20 s there,
+    // clustering its 3.3M faces four times, and kept nothing. Small components still start from
+    // single faces below (a cube keeps its corners so).
+    const bool geometry_only =
+        given.coarsen.degenerate_to_surface && given.coarsen.placement == VertexPlacement::qem &&
+        std::all_of(result.defects.begin(), result.defects.end(),
+                    [](const DualDefect& d) { return d.kind == DualDefect::degenerate_triangle; });
+    for (uint64_t factor = 2; !geometry_only && any(broken_manifolds(result.labels, n, result.defects)) && factor <= 32;
+         factor *= 2) {
       uint64_t finer = n * factor;
       if (finer > faces / 4) break;  // clusters of fewer than 4 faces resolve nothing
       ClusterOptions fo = co;

@@ -119,8 +119,10 @@ struct CoarsenOptions {
   /// clustering, those clusters take their `projected` points (on the surface) instead, so that
   /// the triangle has an area. Off: the triangle is reported (DualDefect::degenerate_triangle),
   /// and the relax, flips and fitting skip the whole mesh. coarsen_mesh turns it off while it
-  /// fixes the clustering (its rounds may find one whose points are apart: the cube of
-  /// tests/test_coarsen.cpp, whose corners they keep) and uses it for its last dual.
+  /// fixes the clustering (its rounds, and the start from single faces of a small component, may
+  /// find one whose points are apart: the cube of tests/test_coarsen.cpp, whose corners they
+  /// keep) and uses it for its last dual; with it, such triangles alone do not make coarsen_mesh
+  /// cluster a component again at 2n, 4n, ... clusters.
   bool degenerate_to_surface = true;
 };
 
