@@ -13,15 +13,12 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <vector>
 
 #include "boundary_rule.h"
 #include "gpu_test_device.h"
-#include "meshcvt/device.h"
-#include "meshcvt/error.h"
 #include "vk_context.h"
 #include "vk_rule_check.h"
 
