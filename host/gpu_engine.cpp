@@ -249,6 +249,7 @@ GpuIteration::GpuIteration(const ClusterProblem& problem, const Mesh& mesh, cons
   lease_.kit = borrow_kit(device_index);
   context_ = lease_.kit->context.get();
   vk::Context& ctx = *context_;
+  vk::arm_faults_from_environment(ctx);  // $MESHCVT_GPU_FAULT: faults on demand, for tests
   disk_ = &lease_.kit->disk_pipeline(max_members);
   const uint64_t nf = face_count_, nc = std::max<uint32_t>(cluster_count_, 1);
   using vk::MemoryUse;

@@ -62,7 +62,9 @@ Buffer::Buffer(Context& context, uint64_t bytes, MemoryUse use, std::string name
     allocate.pNext = &flags;
     allocate.allocationSize = requirements.size;
     allocate.memoryTypeIndex = type;
-    VkResult result = vk.vkAllocateMemory(device, &allocate, nullptr, &memory_);
+    VkResult result = context.fault_due(Context::Fault::out_of_memory)
+                          ? VK_ERROR_OUT_OF_DEVICE_MEMORY
+                          : vk.vkAllocateMemory(device, &allocate, nullptr, &memory_);
     if (result != VK_SUCCESS) {
       memory_ = VK_NULL_HANDLE;
       throw_result(result, ("vkAllocateMemory (" + mib(requirements.size) + " for " + name_ + ")").c_str());

@@ -500,6 +500,22 @@ void Context::ensure_usable() const {
   if (failed()) throw DeviceError("the Vulkan device " + info_.name + " is unusable after an earlier error: " + failure_);
 }
 
+void arm_faults_from_environment(Context& context) {
+  const char* text = std::getenv("MESHCVT_GPU_FAULT");
+  if (!text || !*text) {
+    context.arm_fault(Context::Fault::none, 0);
+    return;
+  }
+  const std::string value = text;
+  const size_t colon = value.find(':');
+  const std::string kind = value.substr(0, colon), count = colon == std::string::npos ? "" : value.substr(colon + 1);
+  const bool digits = !count.empty() && count.size() <= 9 && count.find_first_not_of("0123456789") == std::string::npos;
+  const uint32_t n = digits ? uint32_t(std::stoul(count)) : 0;
+  if ((kind != "lost" && kind != "memory") || n == 0)
+    throw OptionError("MESHCVT_GPU_FAULT=" + value + ": expected lost:N or memory:N with N >= 1");
+  context.arm_fault(kind == "lost" ? Context::Fault::device_lost : Context::Fault::out_of_memory, n);
+}
+
 std::string mib(uint64_t bytes) {
   char buffer[48];
   std::snprintf(buffer, sizeof buffer, "%.1f MiB", static_cast<double>(bytes) / (1024.0 * 1024.0));

@@ -141,6 +141,19 @@ class Context {
   /// Throws DeviceError when the context has failed.
   void ensure_usable() const;
 
+  /// Faults on demand, for tests of the error paths (device lost, out of memory) on a healthy
+  /// device: see arm_faults_from_environment. `count` >= 1: the count-th wait of a Sequence on
+  /// this context from now on (device_lost) or the count-th buffer allocation (out_of_memory) fails
+  /// as if the driver had returned VK_ERROR_DEVICE_LOST or VK_ERROR_OUT_OF_DEVICE_MEMORY; the wait
+  /// still waits, so no work runs under the objects the error path then destroys. none disarms.
+  enum class Fault { none, device_lost, out_of_memory };
+  void arm_fault(Fault kind, uint32_t count) { fault_ = kind, fault_countdown_ = count; }
+  /// Whether the armed fault of `kind` is due now (counts one wait or allocation down).
+  bool fault_due(Fault kind) {
+    if (fault_ != kind || fault_countdown_ == 0) return false;
+    return --fault_countdown_ == 0;
+  }
+
   /// Submissions whose completion has not been seen (see Sequence). While any is pending, the
   /// destructors of buffers, pipelines and the context leak their objects instead of destroying
   /// them under work that may still run (only after a timeout).
@@ -167,7 +180,15 @@ class Context {
   std::vector<uint64_t> allocated_;
   std::string failure_;
   uint32_t pending_ = 0;
+  Fault fault_ = Fault::none;
+  uint32_t fault_countdown_ = 0;
 };
+
+/// Arms `context` from $MESHCVT_GPU_FAULT: "lost:N" (the N-th wait reports a lost device) or
+/// "memory:N" (the N-th buffer allocation runs out of device memory), N >= 1; unset or empty
+/// disarms. The GPU engine calls it once its device is open, so N counts the engine's own waits
+/// and allocations. Throws OptionError naming the variable when the value is malformed.
+void arm_faults_from_environment(Context& context);
 
 /// Bytes as MiB with one decimal, for messages: "1.5 MiB".
 std::string mib(uint64_t bytes);

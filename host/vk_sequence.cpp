@@ -276,6 +276,9 @@ void Sequence::wait() {
   if (state_ != State::submitted) return;
   const auto& vk = context_.vk();
   VkResult result = vk.vkWaitForFences(context_.device(), 1, &fence_, VK_TRUE, context_.timeout_ns());
+  // (An armed fault takes the place of a completed wait's result: the work is done, as after a
+  // real loss nothing runs any more.)
+  if (result == VK_SUCCESS && context_.fault_due(Context::Fault::device_lost)) result = VK_ERROR_DEVICE_LOST;
   if (result == VK_TIMEOUT) {
     const std::string what = "GPU work did not finish within " + seconds_text(context_.timeout_ns());
     context_.fail(what);

@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "meshcvt/device.h"
@@ -36,5 +38,30 @@ inline uint32_t gpu_test_device() {
   REQUIRE(choice.use_gpu);
   return static_cast<uint32_t>(choice.device_index);
 }
+
+/// Sets an environment variable for one scope and restores it after ($MESHCVT_DEVICE,
+/// $MESHCVT_GPU_FAULT, ...).
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const char* value) : name_(name) {
+    if (const char* old = std::getenv(name)) old_ = old;
+    if (value)
+      setenv(name, value, 1);
+    else
+      unsetenv(name);
+  }
+  ~ScopedEnv() {
+    if (old_)
+      setenv(name_, old_->c_str(), 1);
+    else
+      unsetenv(name_);
+  }
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+ private:
+  const char* name_;
+  std::optional<std::string> old_;
+};
 
 }  // namespace meshcvt::test

@@ -29,29 +29,9 @@
 
 using namespace meshcvt;
 
+using test::ScopedEnv;
+
 namespace {
-
-// Sets an environment variable for one scope and restores it after.
-class ScopedEnv {
- public:
-  ScopedEnv(const char* name, const char* value) : name_(name) {
-    if (const char* old = std::getenv(name)) old_ = old;
-    if (value)
-      setenv(name, value, 1);
-    else
-      unsetenv(name);
-  }
-  ~ScopedEnv() {
-    if (old_)
-      setenv(name_, old_->c_str(), 1);
-    else
-      unsetenv(name_);
-  }
-
- private:
-  const char* name_;
-  std::optional<std::string> old_;
-};
 
 DeviceInfo fake_device(uint32_t index, const char* type, bool usable, const char* missing = "") {
   DeviceInfo d;
