@@ -159,6 +159,52 @@ Clustering cluster_without_collapsed_faces(const Mesh& mesh, const Topology& top
   return out;
 }
 
+// The iterations and repair rounds from `labels` to the result, on `it`: out's labels,
+// generators, history, iterations, converged, repair, device and iterate/repair timings.
+void converge(IterationEngine& it, std::vector<uint32_t> labels, const ClusterProblem& problem,
+              const Topology& topology, const std::vector<uint32_t>& cluster_component,
+              const ClusterOptions& options, WorkerPool& pool, Clustering& out) {
+  out.device = it.description();
+  it.reset(std::move(labels));
+  out.history.push_back(IterationRecord{it.energy(), 0, 0, 0});
+
+  double iterate_s = 0, repair_s = 0;
+  for (uint32_t round = 0;; ++round) {
+    auto t = Clock::now();
+    out.converged = run_iterations(it, options.max_iterations, options.progress, round, out);
+    iterate_s += seconds_since(t);
+
+    t = Clock::now();
+    it.release_step_memory();  // reset() below re-creates it when another round follows
+    std::vector<uint32_t> current = it.labels();
+    std::vector<float> generators = it.generators();
+    bool repaired = repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair, &pool);
+    uint32_t restored = restore_cluster_count(problem, topology, generators, current, problem.clusters,
+                                              cluster_component.empty() ? nullptr : &cluster_component);
+    out.repair.restored_clusters += restored;
+    repair_s += seconds_since(t);
+    if (options.progress && (repaired || restored)) options.progress(ClusterProgress{"repair", out.iterations, 0});
+    if (!repaired && restored == 0) break;
+    it.reset(std::move(current));
+    if (round + 1 >= kMaxRepairRounds) {
+      // Out of rounds: keep the repaired (connected, exactly n) clustering without iterating again.
+      out.converged = false;
+      break;
+    }
+    out.repair.rounds = round + 1;
+  }
+  out.timings.iterate = iterate_s;
+  out.timings.repair = repair_s;
+
+  out.labels = it.labels();
+  const std::vector<float>& g = it.generators();
+  out.generators.resize(g.size());
+  for (size_t c = 0; c < g.size() / 3; ++c)
+    for (int k = 0; k < 3; ++k)
+      out.generators[3 * c + k] =
+          options.metric == Metric::l21 ? g[3 * c + k] : problem.origin[k] + problem.extent * g[3 * c + k];
+}
+
 }  // namespace
 
 Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOptions& options) {
@@ -193,14 +239,33 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
   auto make_gpu = [&] {
     return make_gpu_iteration(problem, mesh, topology, options.topology, options.accelerate, choice.device_index);
   };
+  auto make_cpu = [&] {
+    return std::make_unique<BoundaryIteration>(problem, mesh, topology, options.topology, options.accelerate, pool);
+  };
+  // Where the GPU engine may fail over (options.cpu_fallback, or a GPU that "auto" chose), a
+  // DeviceError from it (setup, out of memory, a lost device, a failed rule check) hands the job to
+  // the CPU engine, which takes the same decisions: the result is what `cpu` gives.
+  const bool may_fall_back = choice.use_gpu && (options.cpu_fallback || choice.automatic);
+  bool on_gpu = choice.use_gpu;
+  auto fall_back = [&](const DeviceError& e) {  // (called in a handler: `throw` rethrows e)
+    if (!may_fall_back || !on_gpu) throw;
+    out.device_notice = "using the CPU engine: the GPU engine on " + choice.description + " failed: " + e.what();
+    engine.reset();  // (the GPU's buffers go before the CPU engine's arrays come)
+    engine = make_cpu();
+    on_gpu = false;
+  };
   if (choice.use_gpu) {
     try {
-      gpu_setup = std::async(std::launch::async, make_gpu);
-    } catch (const std::system_error&) {
-      engine = make_gpu();
+      try {
+        gpu_setup = std::async(std::launch::async, make_gpu);
+      } catch (const std::system_error&) {
+        engine = make_gpu();
+      }
+    } catch (const DeviceError& e) {
+      fall_back(e);
     }
   } else {
-    engine = std::make_unique<BoundaryIteration>(problem, mesh, topology, options.topology, options.accelerate, pool);
+    engine = make_cpu();
   }
   out.timings.setup = seconds_since(t_start);
 
@@ -253,54 +318,34 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
   out.timings.init = seconds_since(t);
   if (gpu_setup.valid()) {
     t = Clock::now();
-    engine = gpu_setup.get();
+    try {
+      engine = gpu_setup.get();
+    } catch (const DeviceError& e) {
+      fall_back(e);
+    }
     out.timings.setup += seconds_since(t);  // what the initialization did not hide
   }
-  out.device = engine->description();
   if (options.progress) options.progress(ClusterProgress{"init", 0, 0});
 
-  IterationEngine& it = *engine;
-  it.reset(std::move(labels));
-  out.history.push_back(IterationRecord{it.energy(), 0, 0, 0});
-
-  double iterate_s = 0, repair_s = 0;
-  for (uint32_t round = 0;; ++round) {
-    t = Clock::now();
-    out.converged = run_iterations(it, options.max_iterations, options.progress, round, out);
-    iterate_s += seconds_since(t);
-
-    t = Clock::now();
-    it.release_step_memory();  // reset() below re-creates it when another round follows
-    std::vector<uint32_t> current = it.labels();
-    std::vector<float> generators = it.generators();
-    bool repaired = repair_connectivity(problem, topology, generators, current, problem.clusters, out.repair, &pool);
-    uint32_t restored = restore_cluster_count(problem, topology, generators, current, problem.clusters,
-                                              cluster_component.empty() ? nullptr : &cluster_component);
-    out.repair.restored_clusters += restored;
-    repair_s += seconds_since(t);
-    if (options.progress && (repaired || restored)) options.progress(ClusterProgress{"repair", out.iterations, 0});
-    if (!repaired && restored == 0) break;
-    it.reset(std::move(current));
-    if (round + 1 >= kMaxRepairRounds) {
-      // Out of rounds: keep the repaired (connected, exactly n) clustering without iterating again.
-      out.converged = false;
-      break;
-    }
-    out.repair.rounds = round + 1;
+  // A GPU that fails while iterating hands the job to the CPU engine from the same start, as if
+  // it had run there from the beginning (what the iterations and repairs add to `out` is undone).
+  std::vector<uint32_t> start_labels;
+  Clustering out_at_start;
+  if (may_fall_back && on_gpu) start_labels = labels, out_at_start = out;
+  try {
+    converge(*engine, std::move(labels), problem, topology, cluster_component, options, pool, out);
+  } catch (const DeviceError& e) {
+    if (!may_fall_back || !on_gpu) throw;
+    const ClusterTimings timings = out.timings;
+    out = std::move(out_at_start);
+    out.timings = timings;
+    fall_back(e);
+    converge(*engine, std::move(start_labels), problem, topology, cluster_component, options, pool, out);
   }
-  out.timings.iterate = iterate_s;
-  out.timings.repair = repair_s;
-
-  out.labels = it.labels();
-  const std::vector<float>& g = it.generators();
-  out.generators.resize(g.size());
-  for (size_t c = 0; c < g.size() / 3; ++c)
-    for (int k = 0; k < 3; ++k)
-      out.generators[3 * c + k] =
-          options.metric == Metric::l21 ? g[3 * c + k] : problem.origin[k] + problem.extent * g[3 * c + k];
   out.timings.total = seconds_since(t_start);
   return out;
 }
+
 
 Metric parse_metric(const std::string& s) {
   if (s == "cvt") return Metric::cvt;

@@ -102,7 +102,11 @@ DeviceChoice resolve(const Request& request, const std::vector<DeviceInfo>& devi
           best = &d;
         }
       }
-      if (best) return gpu_choice(*best);
+      if (best) {
+        DeviceChoice choice = gpu_choice(*best);
+        choice.automatic = true;
+        return choice;
+      }
       if (unusable_gpu)
         return cpu_choice("using the CPU engine: " + describe(*unusable_gpu) + " lacks " + unusable_gpu->missing_features);
       if (devices.empty()) return cpu_choice("using the CPU engine: no Vulkan device found");

@@ -276,3 +276,77 @@ TEST_CASE("gpu engine: a bad device index is a DeviceError") {
   CHECK_THROWS_AS(make_gpu_iteration(p, m, t, TopologyMode::preserving, true, 999), DeviceError);
   CHECK_THROWS_AS(make_gpu_iteration(p, m, t, TopologyMode::preserving, true, -1), DeviceError);
 }
+
+// $MESHCVT_GPU_FAULT makes a healthy device fail on demand (vk::arm_faults_from_environment): a
+// lost device at the first wait or in the middle of the iterations, device memory exhausted at the
+// first or a later buffer. cluster() must then throw a DeviceError that says what happened (not
+// crash, hang or return half-made labels); with cpu_fallback it must instead give the CPU engine's
+// result, saying why; and the next clustering in the process must run on the GPU again (a lost
+// device's kit is dropped, not handed out again).
+TEST_CASE("gpu engine: a lost device or exhausted memory is a DeviceError, or with cpu_fallback the CPU's result") {
+  if (test::skip_gpu_tests()) return;
+  int(test::gpu_test_device());
+  const uint64_t messages_before = vk::validation_message_count();
+  Mesh elephant = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
+  ClusterOptions o;
+  o.clusters = 300;
+  o.device = "cpu";
+  const Clustering cpu = cluster(elephant, o);
+  o.device = "gpu";
+  std::string gpu_name;
+  {
+    test::ScopedEnv none("MESHCVT_GPU_FAULT", nullptr);
+    o.cpu_fallback = true;  // no failure: stays on the GPU, says nothing
+    const Clustering gpu = cluster(elephant, o);
+    gpu_name = gpu.device;
+    CHECK(gpu.device != cpu.device);
+    CHECK(gpu.device_notice.empty());
+    CHECK(gpu.labels == cpu.labels);
+  }
+  struct Fault {
+    const char* setting;
+    const char* result;  // the VkResult the message must name
+  };
+  for (const Fault& fault : {Fault{"lost:1", "VK_ERROR_DEVICE_LOST"}, Fault{"lost:6", "VK_ERROR_DEVICE_LOST"},
+                             Fault{"memory:1", "VK_ERROR_OUT_OF_DEVICE_MEMORY"},
+                             Fault{"memory:12", "VK_ERROR_OUT_OF_DEVICE_MEMORY"}}) {
+    CAPTURE(fault.setting);
+    {
+      test::ScopedEnv armed("MESHCVT_GPU_FAULT", fault.setting);
+      o.cpu_fallback = false;
+      std::string message;
+      try {
+        cluster(elephant, o);
+      } catch (const DeviceError& e) {
+        message = e.what();
+      }
+      CHECK(message.find(fault.result) != std::string::npos);
+      CHECK(message.find("--device cpu") != std::string::npos);
+
+      o.cpu_fallback = true;
+      const Clustering fell_back = cluster(elephant, o);
+      CHECK(fell_back.device == cpu.device);
+      CHECK(fell_back.device_notice.find("using the CPU engine") == 0);
+      CHECK(fell_back.device_notice.find(fault.result) != std::string::npos);
+      CHECK(fell_back.labels == cpu.labels);
+      CHECK(fell_back.generators == cpu.generators);
+      CHECK(fell_back.iterations == cpu.iterations);
+      CHECK(fell_back.repair.rounds == cpu.repair.rounds);
+      REQUIRE(fell_back.history.size() == cpu.history.size());
+      for (size_t i = 0; i < cpu.history.size(); ++i) {
+        CHECK(fell_back.history[i].moves == cpu.history[i].moves);
+        CHECK(same_bits(fell_back.history[i].energy, cpu.history[i].energy));
+      }
+    }
+    test::ScopedEnv disarmed("MESHCVT_GPU_FAULT", nullptr);
+    o.cpu_fallback = false;
+    const Clustering again = cluster(elephant, o);
+    CHECK(again.device == gpu_name);
+    CHECK(again.labels == cpu.labels);
+  }
+  {
+    test::ScopedEnv bad("MESHCVT_GPU_FAULT", "lost");
+    CHECK_THROWS_AS(cluster(elephant, o), OptionError);  // a typo is not a device failure
+  }
+  CHECK(vk::validation_message_count() == messages_before);
+}

@@ -174,6 +174,11 @@ TEST_CASE("resolve_device: ranking and auto fallback") {
   CHECK(resolve_device("auto", mixed).device_index == 3);
   CHECK(resolve_device("gpu:1", mixed).device_index == 1);
   CHECK(resolve_device("gpu:0", mixed).use_gpu);            // lavapipe when asked for by index
+  // Only a GPU that auto chose may hand a failing job to the CPU engine (cluster()'s fallback).
+  CHECK(resolve_device("auto", mixed).automatic);
+  CHECK_FALSE(resolve_device("gpu", mixed).automatic);
+  CHECK_FALSE(resolve_device("gpu:3", mixed).automatic);
+  CHECK_FALSE(resolve_device("cpu", mixed).automatic);
 
   const std::string unusable = error_text([&] { resolve_device("gpu:2", mixed); });
   CHECK(unusable.find("gpu:2") != std::string::npos);

@@ -66,7 +66,7 @@ void write_report(const ApproximateArgs& a, const Mesh& mesh, const ReadStats& r
   j.value("chord_error", a.chord_error).value("chord_rule", a.chord_rule).value("teleport", !a.no_teleport)
       .value("max_iterations", a.max_iter).value("threads", a.threads).end_object();
   const Clustering& c = s.clustering;
-  j.begin_object("partition").value("device", c.device).value("proxies", s.partition_proxies)
+  j.begin_object("partition").value("device", c.device).value("device_notice", c.device_notice).value("proxies", s.partition_proxies)
       .value("iterations", c.iterations).value("converged", c.converged);
   j.begin_array("rounds");
   for (const RefinementRound& r : s.rounds)

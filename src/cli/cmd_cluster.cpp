@@ -35,7 +35,7 @@ void write_report(const ClusterArgs& a, const Mesh& mesh, const Clustering& c, c
   j.begin_object("options").value("clusters", a.clusters).value("metric", a.metric).value("init", a.init)
       .value("topology", a.topology).value("max_iterations", a.max_iter).value("accelerate", !a.no_accelerate).value("lloyd_steps", a.lloyd_steps)
       .value("threads", a.threads).value("seed", a.seed).value("gradation", a.gradation).end_object();
-  j.value("device", c.device).value("iterations", c.iterations).value("converged", c.converged);
+  j.value("device", c.device).value("device_notice", c.device_notice).value("iterations", c.iterations).value("converged", c.converged);
   j.value("energy_initial", c.history.front().energy).value("energy_final", c.history.back().energy);
   j.begin_object("repair").value("rounds", c.repair.rounds).value("split_pieces", c.repair.split_pieces)
       .value("reassigned_faces", c.repair.reassigned_faces).value("dissolved_isolated", c.repair.dissolved_isolated)

@@ -277,6 +277,7 @@ void run_coarsen(const CoarsenArgs& a) {
     j.begin_object();
     j.value("input", a.input).value("faces", uint64_t(mesh.face_count())).value("clusters", a.clusters)
         .value("metric", a.metric).value("placement", a.placement).value("device", c.device)
+        .value("device_notice", c.device_notice)
         .value("iterations", c.iterations).value("converged", c.converged);
     j.value("input_faces", uint64_t(result.input_faces)).value("split_vertices", prepared.split_vertices + job.split_vertices)
         .value("reoriented_faces", prepared.flipped_faces + job.reoriented_faces)

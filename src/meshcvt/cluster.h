@@ -64,6 +64,11 @@ struct ClusterOptions {
   uint64_t seed = 1;               ///< for Init::random
   /// "auto", "cpu", "gpu" or "gpu:N". Empty: $MESHCVT_DEVICE, else "auto".
   std::string device;
+  /// When the GPU engine fails (a DeviceError: its setup, out of device memory, a lost device, a
+  /// failed rule check), finish on the CPU engine from the same start instead of throwing; the
+  /// labels are then the CPU engine's, as with "cpu", and Clustering::device_notice says why. A
+  /// GPU chosen by "auto" always does this; set it to let "gpu" and "gpu:N" do it too.
+  bool cpu_fallback = false;
   /// Optional per-face density rho_k (face_count entries, > 0); empty means 1 everywhere.
   std::vector<float> density;
   /// Optional: how many clusters each connected component of the face graph gets (indexed like
@@ -119,7 +124,9 @@ struct Clustering {
   RepairStats repair;
   ClusterTimings timings;
   std::string device;       ///< which engine ran, e.g. "cpu (2 threads)" or the GPU's name
-  std::string device_notice;  ///< one line when --device auto fell back to the CPU engine; else empty
+  /// One line when the CPU engine ran instead of a GPU: "auto" found none it could use, or the
+  /// GPU engine failed and fell back (ClusterOptions::cpu_fallback); else empty.
+  std::string device_notice;
 };
 
 /// Clusters the faces of `mesh` into exactly options.clusters connected clusters.

@@ -49,6 +49,9 @@ struct DeviceChoice {
   int device_index = -1;     ///< DeviceInfo::index of the chosen GPU; -1 for the CPU engine
   std::string description;   ///< "cpu", or "gpu:N NAME (TYPE)"
   std::string notice;        ///< one line for the user when "auto" fell back to the CPU; else empty
+  /// The GPU was chosen by "auto": should its engine fail, the CPU engine takes over
+  /// (ClusterOptions::cpu_fallback).
+  bool automatic = false;
 };
 
 /// Resolves a device request against the devices of this machine (calls list_devices() only when
