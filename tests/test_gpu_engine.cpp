@@ -32,6 +32,21 @@ namespace {
 
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
+// Checks that two clusterings of cluster() are the same result: labels, generators, iteration
+// counts, repair rounds and the energy history to the bit.
+void check_same_clustering(const Clustering& a, const Clustering& b) {
+  CHECK(a.labels == b.labels);
+  CHECK(a.generators == b.generators);
+  CHECK(a.iterations == b.iterations);
+  CHECK(a.converged == b.converged);
+  CHECK(a.repair.rounds == b.repair.rounds);
+  REQUIRE(a.history.size() == b.history.size());
+  for (size_t i = 0; i < a.history.size(); ++i) {
+    CHECK(a.history[i].moves == b.history[i].moves);
+    CHECK(same_bits(a.history[i].energy, b.history[i].energy));
+  }
+}
+
 // A disc whose centre vertex has `spokes` faces around it, plus an outer ring of quads: vertex rings
 // far beyond 64 faces, the disk filter's slow path on the CPU and the large member array on the GPU.
 Mesh fan(uint32_t spokes) {
@@ -217,16 +232,7 @@ TEST_CASE("gpu engine: cluster() with device \"gpu\" equals device \"cpu\" end t
     CAPTURE(k.clusters);
     CAPTURE(k.density != nullptr);
     CHECK(gpu.device != cpu.device);
-    CHECK(gpu.labels == cpu.labels);
-    CHECK(gpu.generators == cpu.generators);
-    CHECK(gpu.iterations == cpu.iterations);
-    CHECK(gpu.converged == cpu.converged);
-    CHECK(gpu.repair.rounds == cpu.repair.rounds);
-    REQUIRE(gpu.history.size() == cpu.history.size());
-    for (size_t i = 0; i < cpu.history.size(); ++i) {
-      CHECK(gpu.history[i].moves == cpu.history[i].moves);
-      CHECK(same_bits(gpu.history[i].energy, cpu.history[i].energy));
-    }
+    check_same_clustering(gpu, cpu);
     ClusterValidity v = check_clusters(build_topology(*k.mesh), gpu.labels, k.clusters);
     CHECK(v.ok());
   }
@@ -328,15 +334,7 @@ TEST_CASE("gpu engine: a lost device or exhausted memory is a DeviceError, or wi
       CHECK(fell_back.device == cpu.device);
       CHECK(fell_back.device_notice.find("using the CPU engine") == 0);
       CHECK(fell_back.device_notice.find(fault.result) != std::string::npos);
-      CHECK(fell_back.labels == cpu.labels);
-      CHECK(fell_back.generators == cpu.generators);
-      CHECK(fell_back.iterations == cpu.iterations);
-      CHECK(fell_back.repair.rounds == cpu.repair.rounds);
-      REQUIRE(fell_back.history.size() == cpu.history.size());
-      for (size_t i = 0; i < cpu.history.size(); ++i) {
-        CHECK(fell_back.history[i].moves == cpu.history[i].moves);
-        CHECK(same_bits(fell_back.history[i].energy, cpu.history[i].energy));
-      }
+      check_same_clustering(fell_back, cpu);
     }
     test::ScopedEnv disarmed("MESHCVT_GPU_FAULT", nullptr);
     o.cpu_fallback = false;
