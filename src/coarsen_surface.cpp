@@ -232,6 +232,7 @@ struct JobRun {
   size_t prepared_faces = 0;
   CoarsenMeshResult job;
   double order_seconds = 0;
+  double topology_seconds = 0;  // the topology, prepare_surface and refine_small_components
 };
 
 // origin: per face of m, the face of the mesh given to coarsen_surface.
@@ -244,6 +245,7 @@ JobRun run_job(Mesh m, const std::vector<float>& d, const std::vector<uint32_t>&
   run.density = to_reordered(d, run.order);
   run.origin = run.order.identity() ? origin : inherited(origin, run.order.face_of);
   run.order_seconds = seconds_since(start);
+  const auto topology_start = Clock::now();
   run.topology = build_topology(m, options.job.cluster.threads);
   if (prepare) {
     run.prepared = prepare_surface(m, run.topology);
@@ -252,6 +254,7 @@ JobRun run_job(Mesh m, const std::vector<float>& d, const std::vector<uint32_t>&
   if (options.refine_small_components)
     run.refined = refine_small_components(m, run.topology, run.density, run.refine_parent);
   if (!run.refine_parent.empty()) run.origin = inherited(run.origin, run.refine_parent);
+  run.topology_seconds = seconds_since(topology_start);
   job.cluster.density = run.density;  // coarsen_mesh weighs both the clusters and the dual with it
   run.job = coarsen_mesh(m, run.topology, job);
   run.surface = std::move(m);
@@ -259,7 +262,8 @@ JobRun run_job(Mesh m, const std::vector<float>& d, const std::vector<uint32_t>&
 }
 
 double seconds_of(const JobRun& run) {
-  return run.order_seconds + run.job.cluster_seconds + run.job.fix_seconds + run.job.coarsen_seconds;
+  return run.order_seconds + run.topology_seconds + run.job.cluster_seconds + run.job.fix_seconds +
+         run.job.coarsen_seconds;
 }
 
 // The components of a job's surface that hold a cluster a defect names, as faces of the mesh the
@@ -515,6 +519,7 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
                                          : std::min(result.discarded_job_defects, int64_t(job.defects));
     }
   result.prepare_seconds += run.order_seconds;
+  result.topology_seconds = run.topology_seconds;
   if (prepare) {
     result.prepared = run.prepared;
     result.prepared_faces = run.prepared_faces;

@@ -348,6 +348,7 @@ void run_coarsen(const CoarsenArgs& a) {
     for (uint32_t k : job.allocation.clusters) j.item(k);
     j.end_array();
     j.begin_object("timings_s").value("read", read_s).value("subdivide_density", result.prepare_seconds)
+        .value("topology", result.topology_seconds)
         .value("cluster", job.cluster_seconds).value("fix", job.fix_seconds).value("coarsen", coarsen_s)
         .value("write", write_s).value("discarded_job", result.discarded_seconds).value("error", error_s).end_object();
     j.end_object();

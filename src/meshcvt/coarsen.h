@@ -615,9 +615,12 @@ struct CoarsenSurfaceResult {
   /// The fewest defects among the jobs not kept (-1 when one job ran), and their time together.
   int64_t discarded_job_defects = -1;
   double discarded_seconds = 0;
-  /// Subdivision, density, prepare_surface, splitting and locality order, in seconds (the job's
-  /// own times are in job).
+  /// Subdivision, density, splitting and locality order, in seconds (the job's own times are in
+  /// job).
   double prepare_seconds = 0;
+  /// The kept job's topology (build_topology), prepare_surface and the refinement of too small
+  /// components, in seconds.
+  double topology_seconds = 0;
 };
 
 /// Coarsens a mesh as `meshcvt coarsen` does, to exactly n = options.job.cluster.clusters vertices:

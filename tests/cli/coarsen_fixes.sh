@@ -81,7 +81,9 @@ assert r['defects'] == [] and r['component_clusters'] == [n]
 assert r['output']['vertices'] == n and r['output']['euler_characteristic'] == -4
 assert r['output']['nonmanifold_edges'] == 0 and r['output']['nonmanifold_vertices'] == 0
 assert r['timings_s']['fix'] >= 0
+assert r['timings_s']['topology'] > 0  # the adjacency is built before clustering, and timed
 assert r['timings_s']['error'] == 0 and 'error' not in r  # --no-error: nothing measured
+assert r['device'].startswith('cpu') and r['device_notice'] == ''  # no GPU asked for, none failed
 PY
 done
 
