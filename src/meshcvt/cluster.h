@@ -124,7 +124,8 @@ struct Clustering {
   RepairStats repair;
   ClusterTimings timings;
   std::string device;       ///< which engine ran, e.g. "cpu (2 threads)" or the GPU's name
-  /// One line when the CPU engine ran instead of a GPU: "auto" found none it could use, or the
+  /// One line saying why the CPU engine ran where a GPU was looked for: "auto" found a GPU that
+  /// lacks a feature, or none where the machine seemed to have one (no loader, no device), or the
   /// GPU engine failed and fell back (ClusterOptions::cpu_fallback); else empty.
   std::string device_notice;
 };
