@@ -14,12 +14,15 @@ A run passes when
     it warned of defects, cluster/approximate: a label per face), or
   * it exits 1 or 2 with a `meshcvt: error:` line naming the input file (not an internal error:
     an exception meshcvt does not raise itself) and leaves no output, no temporary file behind;
+  * with --gpu-faults, a run given $MESHCVT_GPU_FAULT (a lost device at the N-th wait of the GPU
+    engine, or no device memory at its N-th buffer, N random) may also fail with an error line
+    that names that VkResult instead of the input, under the same rules about its outputs;
 and fails on anything else: a signal, a sanitizer report, a timeout (a hang), a half-written or
 missing output, an exit status 0 with an error line. Failing cases are kept in WORK/fail-N/ with the
 command line (`cmd.txt`), stderr, and the damaged mesh, so that they can be rerun.
 
 usage: bench/pipeline_stress.py MESHCVT SECONDS [--runs N] [--seed S] [--work DIR] [--timeout T] [--gpu SHARE]
-                                [--light] [--slow S] MESH.off...
+                                [--gpu-faults SHARE] [--light] [--slow S] MESH.off...
        (MESHCVT: best a sanitizer build, e.g. build-asan/meshcvt; T per run, default 120 s)
 Prints one line per failure and a summary; exit status 1 when anything failed.
 """
@@ -224,7 +227,11 @@ def count_lines(path):
         return None
 
 
-def one_run(rng, meshcvt, seed_mesh, run_dir, timeout, gpu_share=0.0, light=False):
+# What a fault made on demand ($MESHCVT_GPU_FAULT's kind) must name in the error line.
+FAULT_RESULTS = {"lost": "VK_ERROR_DEVICE_LOST", "memory": "VK_ERROR_OUT_OF_DEVICE_MEMORY"}
+
+
+def one_run(rng, meshcvt, seed_mesh, run_dir, timeout, gpu_share=0.0, light=False, fault_share=0.0):
     verts, faces = seed_mesh
     steps = []
     for _ in range(rng.choice([1, 1, 2, 3])):
@@ -266,6 +273,12 @@ def one_run(rng, meshcvt, seed_mesh, run_dir, timeout, gpu_share=0.0, light=Fals
     # The Vulkan layer's and lavapipe's own leaks (tests/lsan.supp says which), as the test suite.
     env.setdefault("LSAN_OPTIONS", "suppressions=" + os.path.join(os.path.dirname(os.path.abspath(__file__)),
                                                                  "..", "tests", "lsan.supp"))
+    fault = None  # (drawn only with --gpu-faults: the runs of a seed stay the same without it)
+    command_line = args
+    if fault_share > 0 and "--device" in args and rng.random() < fault_share:
+        fault = rng.choice(sorted(FAULT_RESULTS))
+        env["MESHCVT_GPU_FAULT"] = "%s:%d" % (fault, rng.randint(1, 40))
+        command_line = ["MESHCVT_GPU_FAULT=" + env["MESHCVT_GPU_FAULT"]] + args  # as cmd.txt shows it
     try:
         p = subprocess.run(args, capture_output=True, text=True, timeout=timeout, env=env)
         rc, err = p.returncode, p.stderr
@@ -296,11 +309,12 @@ def one_run(rng, meshcvt, seed_mesh, run_dir, timeout, gpu_share=0.0, light=Fals
             problem = "exit %d without an error line" % rc
         elif any(l.startswith("meshcvt: error: internal:") for l in error_lines):
             problem = "an internal error (an exception meshcvt does not raise itself)"
-        elif mesh_path not in error_lines[0]:
-            problem = "the error does not name the input"
+        elif mesh_path not in error_lines[0] and not (fault and FAULT_RESULTS[fault] in error_lines[0]):
+            problem = "the error names neither the input nor %s" % FAULT_RESULTS[fault] if fault else \
+                      "the error does not name the input"
         elif os.path.exists(out) or os.path.exists(labels):
             problem = "exit %d but an output was written" % rc
-    return problem, args, steps, err
+    return problem, command_line, steps, err
 
 
 def main():
@@ -322,6 +336,9 @@ def main():
                          "0: off)")
     ap.add_argument("--gpu", type=float, default=0.0, metavar="SHARE",
                     help="share of cluster and coarsen runs given --device gpu (default 0)")
+    ap.add_argument("--gpu-faults", type=float, default=0.0, metavar="SHARE",
+                    help="share of the --device gpu runs given $MESHCVT_GPU_FAULT, a lost device or no device "
+                         "memory at a random point (default 0)")
     a = ap.parse_args()
     rng = random.Random(a.seed)
     seeds = [(m, read_off(m)) for m in a.meshes]
@@ -335,7 +352,7 @@ def main():
         shutil.rmtree(run_dir, ignore_errors=True)
         os.makedirs(run_dir)
         started = time.time()
-        problem, args, steps, err = one_run(rng, a.meshcvt, mesh, run_dir, a.timeout, a.gpu, a.light)
+        problem, args, steps, err = one_run(rng, a.meshcvt, mesh, run_dir, a.timeout, a.gpu, a.light, a.gpu_faults)
         took = time.time() - started
         runs += 1
         def keep(kind, number, what):
@@ -348,12 +365,14 @@ def main():
             with open(os.path.join(kept, "stderr.txt"), "w") as o:
                 o.write(err)
             print("%s %d: %s (%s; %s) %s" % (kind.upper(), number, what, os.path.basename(name), "; ".join(steps),
-                                             " ".join(args[1:])), flush=True)
+                                             " ".join(x for x in args if x != a.meshcvt)), flush=True)
 
         if a.slow > 0 and took > a.slow:
             slow += 1
             keep("slow", slow, "%.1f s" % took)
         key = "error" if "meshcvt: error" in err else "ok"
+        if key == "error" and any(r in err for r in FAULT_RESULTS.values()):
+            key = "gpu fault"
         outcomes[key] = outcomes.get(key, 0) + 1
         if problem:
             failures += 1
