@@ -71,7 +71,8 @@ struct DeviceChoice {
 ///              not usable, `notice` says so in one line; a machine with only CPU-type devices
 ///              falls back silently. On Linux, a machine without a GPU device node (/dev/dri/renderD*,
 ///              /dev/nvidia*, /dev/dxg) falls back silently without loading Vulkan at all (it
-///              costs 25-100 ms); $MESHCVT_PROBE_VULKAN=1 probes anyway.
+///              costs 25-100 ms); $MESHCVT_PROBE_VULKAN=1 probes anyway. A GPU it picks is marked
+///              `automatic`: cluster() hands the job to the CPU engine if that GPU's engine fails.
 ///   other   -> OptionError listing the accepted forms (naming $MESHCVT_DEVICE when it came from there).
 DeviceChoice resolve_device(const std::string& request);
 
