@@ -215,7 +215,17 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
       options.component_clusters.empty())
     return cluster_without_collapsed_faces(mesh, topology, options);
   auto t_start = Clock::now();
-  DeviceChoice choice = resolve_device_for_mesh(options.device, mesh.face_count());
+  DeviceChoice choice;
+  try {
+    choice = resolve_device_for_mesh(options.device, mesh.face_count());
+  } catch (const DeviceError& e) {  // no loader, no such device, none usable
+    if (!options.cpu_fallback) throw;
+    choice.description = "cpu";
+    choice.notice = "using the CPU engine, not " +
+                    (options.device.empty() ? std::string("the device $MESHCVT_DEVICE names")
+                                            : "\"" + options.device + "\"") +
+                    ": " + e.what();
+  }
 
   Clustering out;
   out.device_notice = choice.notice;

@@ -348,3 +348,26 @@ TEST_CASE("gpu engine: a lost device or exhausted memory is a DeviceError, or wi
   }
   CHECK(vk::validation_message_count() == messages_before);
 }
+
+// cpu_fallback also covers a GPU that cannot be had at all (no loader, no device, no such index):
+// "gpu:99" runs on the CPU engine with a notice naming it, instead of throwing. No device needed.
+TEST_CASE("cluster(): cpu_fallback runs on the CPU when the GPU asked for does not exist") {
+  Mesh sphere = test::icosphere(3);
+  ClusterOptions o;
+  o.clusters = 40;
+  o.device = "gpu:99";
+  CHECK_THROWS_AS(cluster(sphere, o), DeviceError);
+  o.cpu_fallback = true;
+  const Clustering fell_back = cluster(sphere, o);
+  o.device = "cpu";
+  o.cpu_fallback = false;
+  const Clustering cpu = cluster(sphere, o);
+  CHECK(fell_back.device == cpu.device);
+  CHECK(fell_back.device_notice.find("using the CPU engine") == 0);
+  CHECK(fell_back.device_notice.find("gpu:99") != std::string::npos);
+  CHECK(cpu.device_notice.empty());
+  check_same_clustering(fell_back, cpu);
+  o.device = "bogus";  // a misspelt request is the caller's mistake, not a missing GPU
+  o.cpu_fallback = true;
+  CHECK_THROWS_AS(cluster(sphere, o), OptionError);
+}

@@ -64,10 +64,11 @@ struct ClusterOptions {
   uint64_t seed = 1;               ///< for Init::random
   /// "auto", "cpu", "gpu" or "gpu:N". Empty: $MESHCVT_DEVICE, else "auto".
   std::string device;
-  /// When the GPU engine fails (a DeviceError: its setup, out of device memory, a lost device, a
-  /// failed rule check), finish on the CPU engine from the same start instead of throwing; the
-  /// labels are then the CPU engine's, as with "cpu", and Clustering::device_notice says why. A
-  /// GPU chosen by "auto" always does this; set it to let "gpu" and "gpu:N" do it too.
+  /// When the GPU asked for cannot be had (no Vulkan loader, no such device, none usable) or its
+  /// engine fails (a DeviceError: its setup, out of device memory, a lost device, a failed rule
+  /// check), run on the CPU engine (from the same start) instead of throwing: the labels are then
+  /// the CPU engine's, as with "cpu", and Clustering::device_notice says why. A GPU chosen by
+  /// "auto" always fails over so; set this to let "gpu" and "gpu:N" do it too.
   bool cpu_fallback = false;
   /// Optional per-face density rho_k (face_count entries, > 0); empty means 1 everywhere.
   std::vector<float> density;
