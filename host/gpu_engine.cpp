@@ -242,8 +242,8 @@ GpuIteration::GpuIteration(const ClusterProblem& problem, const Mesh& mesh, cons
   const uint32_t ring_bound = max_ring_bound(mesh, topology);
   if (ring_bound > kMaxRingMembers)
     throw DeviceError("gpu engine: the mesh has a vertex ring of up to " + std::to_string(ring_bound) +
-                      " faces; the GPU disk filter supports at most " + std::to_string(kMaxRingMembers) +
-                      " (use --device cpu, or --topology paper)");
+                      " faces; the GPU disk filter supports at most " + std::to_string(kMaxRingMembers),
+                      "use --device cpu, or --topology paper");
   const uint32_t max_members = std::max<uint32_t>(64, (ring_bound + 31) / 32 * 32);
 
   lease_.kit = borrow_kit(device_index);

@@ -131,18 +131,18 @@ void load_vulkan() {
     if (!library) {
       const char* why = dlerror();
       throw DeviceError(std::string("no Vulkan loader: cannot open MESHCVT_VULKAN_LIBRARY=") + path + " (" +
-                        (why ? why : "unknown reason") + "); " + kInstallHint);
+                        (why ? why : "unknown reason") + ")", kInstallHint);
     }
     auto get_proc = reinterpret_cast<PFN_vkGetInstanceProcAddr>(dlsym(library, "vkGetInstanceProcAddr"));
     if (!get_proc)
-      throw DeviceError(std::string("no Vulkan loader: ") + path + " has no vkGetInstanceProcAddr; " + kInstallHint);
+      throw DeviceError(std::string("no Vulkan loader: ") + path + " has no vkGetInstanceProcAddr", kInstallHint);
     volkInitializeCustom(get_proc);
   } else if (volkInitialize() != VK_SUCCESS) {
-    throw DeviceError(std::string("no Vulkan loader: libvulkan.so.1 cannot be opened; ") + kInstallHint);
+    throw DeviceError(std::string("no Vulkan loader: libvulkan.so.1 cannot be opened"), kInstallHint);
   }
   // Vulkan 1.0 loaders cannot create the 1.2 instance meshcvt needs.
   if (!vkEnumerateInstanceVersion)
-    throw DeviceError(std::string("the Vulkan loader is version 1.0; meshcvt needs 1.1 or newer; ") + kInstallHint);
+    throw DeviceError(std::string("the Vulkan loader is version 1.0; meshcvt needs 1.1 or newer"), kInstallHint);
   g_loaded = true;
 }
 
@@ -217,7 +217,7 @@ Instance::Instance(bool validation, bool allow_no_driver) {
   if (result == VK_ERROR_INCOMPATIBLE_DRIVER) {
     instance_ = VK_NULL_HANDLE;
     if (allow_no_driver) return;
-    throw DeviceError(std::string("no Vulkan device: the Vulkan loader found no driver; ") + kInstallHint);
+    throw DeviceError(std::string("no Vulkan device: the Vulkan loader found no driver"), kInstallHint);
   }
   check(result, "vkCreateInstance");
   volkLoadInstanceOnly(instance_);
@@ -483,8 +483,8 @@ void Context::check_allocation(uint64_t bytes, uint32_t heap, const std::string&
   if (bytes > available)
     throw DeviceError(prefix + mib(available) + " available in memory heap " + std::to_string(heap) + " (" +
                       mib(memory_.memoryHeaps[heap].size) + " in all" +
-                      (has_memory_budget_ ? ", per VK_EXT_memory_budget)" : ")") +
-                      "; try a smaller mesh or --device cpu");
+                      (has_memory_budget_ ? ", per VK_EXT_memory_budget)" : ")"),
+                      "try a smaller mesh or --device cpu");
   if (max_allocation_size_ && bytes > max_allocation_size_)
     throw DeviceError(prefix + "but one allocation may hold at most " + mib(max_allocation_size_) +
                       " (maxMemoryAllocationSize)");

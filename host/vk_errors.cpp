@@ -54,26 +54,32 @@ std::string result_name(VkResult result) {
   }
 }
 
-// What a user can do about the results that have a usual cause.
-static const char* hint(VkResult result) {
+// What the results with a usual cause mean, and what a user can do about them.
+struct Hint {
+  const char* meaning;  // part of the reason
+  const char* advice;   // DeviceError::advice
+};
+
+static Hint hint(VkResult result) {
   switch (result) {
     case VK_ERROR_OUT_OF_DEVICE_MEMORY:
-      return "the GPU is out of memory; try a smaller mesh or --device cpu";
+      return {"the GPU is out of memory", "try a smaller mesh or --device cpu"};
     case VK_ERROR_OUT_OF_HOST_MEMORY:
-      return "the driver ran out of host memory";
+      return {"the driver ran out of host memory", nullptr};
     case VK_ERROR_DEVICE_LOST:
-      return "the GPU was lost (driver reset, hang or crash); the run was abandoned, try --device cpu";
+      return {"the GPU was lost: driver reset, hang or crash", "the run was abandoned; try --device cpu"};
     case VK_ERROR_INCOMPATIBLE_DRIVER:
-      return "no compatible Vulkan driver; install one, e.g. mesa-vulkan-drivers for the CPU device lavapipe";
+      return {"no compatible Vulkan driver", "install one, e.g. mesa-vulkan-drivers for the CPU device lavapipe"};
     default:
-      return nullptr;
+      return {nullptr, nullptr};
   }
 }
 
 void throw_result(VkResult result, const char* call) {
-  std::string message = std::string(call) + " failed: " + result_name(result);
-  if (const char* h = hint(result)) message += std::string(" (") + h + ")";
-  throw DeviceError(message);
+  std::string reason = std::string(call) + " failed: " + result_name(result);
+  const Hint h = hint(result);
+  if (h.meaning) reason += std::string(" (") + h.meaning + ")";
+  throw DeviceError(reason, h.advice ? h.advice : "");
 }
 
 }  // namespace meshcvt::vk

@@ -139,8 +139,9 @@ void check_boundary_rule(Context& context) {
     const std::string differences = rule_differences(cases, evaluate_boundary_rule(context, cases));
     if (!differences.empty())
       throw DeviceError("the boundary rule on " + context.info().name + " differs from the CPU engine's" +
-                        (subnormal ? " where values are subnormal" : "") + ": " + differences +
-                        ". The GPU engine would not give the CPU engine's labels: use --device cpu");
+                            (subnormal ? " where values are subnormal" : "") + ": " + differences +
+                            ". The GPU engine would not give the CPU engine's labels",
+                        "use --device cpu");
   }
 }
 

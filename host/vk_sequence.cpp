@@ -282,8 +282,8 @@ void Sequence::wait() {
   if (result == VK_TIMEOUT) {
     const std::string what = "GPU work did not finish within " + seconds_text(context_.timeout_ns());
     context_.fail(what);
-    throw DeviceError(what + " (vkWaitForFences timed out; the device may be hung or too slow for this job; "
-                             "raise MESHCVT_GPU_TIMEOUT or use --device cpu)");
+    throw DeviceError(what + " (vkWaitForFences timed out: the device may be hung or too slow for this job)",
+                      "raise MESHCVT_GPU_TIMEOUT or use --device cpu");
   }
   // Finished, or failed for good (device lost): either way it no longer runs.
   state_ = State::idle;

@@ -259,7 +259,8 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
   bool on_gpu = choice.use_gpu;
   auto fall_back = [&](const DeviceError& e) {  // (called in a handler: `throw` rethrows e)
     if (!may_fall_back || !on_gpu) throw;
-    out.device_notice = "using the CPU engine: the GPU engine on " + choice.description + " failed: " + e.what();
+    // (reason(): the error's advice, "try --device cpu", is what happens here already)
+    out.device_notice = "using the CPU engine: the GPU engine on " + choice.description + " failed: " + e.reason();
     engine.reset();  // (the GPU's buffers go before the CPU engine's arrays come)
     engine = make_cpu();
     on_gpu = false;

@@ -36,4 +36,7 @@ FileError FileError::at_byte(std::string file, uint64_t byte, std::string reason
   return FileError(std::move(file), Where::byte, byte, std::move(reason));
 }
 
+DeviceError::DeviceError(const std::string& reason, const std::string& advice)
+    : Error(advice.empty() ? reason : reason + "; " + advice), reason_(reason), advice_(advice) {}
+
 }  // namespace meshcvt

@@ -76,6 +76,15 @@ TEST_CASE("vk: VkResult names and DeviceError messages") {
   const std::string message = error_text([] { vk::check(VK_ERROR_DEVICE_LOST, "vkQueueSubmit"); });
   CHECK(message.find("vkQueueSubmit failed: VK_ERROR_DEVICE_LOST") == 0);
   CHECK(message.find("--device cpu") != std::string::npos);
+  try {
+    vk::check(VK_ERROR_DEVICE_LOST, "vkQueueSubmit");
+  } catch (const DeviceError& e) {  // the advice apart from the reason: cluster()'s fallback reports the reason
+    CHECK(e.reason().find("vkQueueSubmit failed: VK_ERROR_DEVICE_LOST") == 0);
+    CHECK(e.reason().find("--device cpu") == std::string::npos);
+    CHECK(e.advice().find("--device cpu") != std::string::npos);
+    CHECK(std::string(e.what()) == e.reason() + "; " + e.advice());
+  }
+  CHECK(std::string(DeviceError("no device").what()) == "no device");
   CHECK(error_text([] { vk::check(VK_ERROR_OUT_OF_DEVICE_MEMORY, "vkAllocateMemory"); })
             .find("vkAllocateMemory failed: VK_ERROR_OUT_OF_DEVICE_MEMORY") == 0);
 }

@@ -44,9 +44,18 @@ class OptionError : public Error {
 };
 
 /// No usable compute device, out of device memory, device lost, a missing Vulkan feature.
+/// what() reads "REASON" or "REASON; ADVICE": the advice says what a user can do about it ("try
+/// --device cpu"). A caller that acts on the error itself (cluster()'s fall back to the CPU engine)
+/// reports reason() alone.
 class DeviceError : public Error {
  public:
-  using Error::Error;
+  explicit DeviceError(const std::string& reason, const std::string& advice = {});
+
+  const std::string& reason() const { return reason_; }  ///< what failed, without the advice
+  const std::string& advice() const { return advice_; }  ///< what to do about it; may be empty
+
+ private:
+  std::string reason_, advice_;
 };
 
 }  // namespace meshcvt
