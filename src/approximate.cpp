@@ -76,6 +76,7 @@
 #include "meshcvt/approximate.h"
 #include "meshcvt/error.h"
 #include "parallel.h"
+#include "polygon_triangulation.h"
 
 namespace meshcvt {
 
@@ -1336,10 +1337,9 @@ bool Mesher::coloring_shape(uint32_t region, const std::vector<uint32_t>& polygo
   return polygon_edges == m;
 }
 
-// Triangulation of `polygon` by interval dynamic programming: fewest bad triangles first (a
-// diagonal used elsewhere costs m, a triangle facing away from the proxy normal or a sliver costs
-// 1), then the largest smallest angle. The order (cost, then -quality) is monotone under combining
-// two sub-polygons with a triangle, so the optimum is exact. Returns the cost (0: every triangle
+// Triangulation of `polygon` by interval dynamic programming (polygon_triangulation.cpp): fewest bad
+// triangles first (a diagonal used elsewhere costs m, a triangle facing away from the proxy normal
+// or a sliver costs 1), then the largest smallest angle. Returns the cost (0: every triangle
 // acceptable); triangles (output ids) go to `tris`.
 uint32_t Mesher::triangulate_polygon(uint32_t region, const std::vector<uint32_t>& polygon,
                                      std::vector<uint32_t>& tris) const {
@@ -1355,72 +1355,21 @@ uint32_t Mesher::triangulate_polygon(uint32_t region, const std::vector<uint32_t
     return cost;
   }
   const V3 n = proxies_.normal[region];
-  const bool any_direction = dot(n, n) == 0;
-  std::vector<V3> p(m);
-  for (uint32_t i = 0; i < m; ++i) p[i] = anchor_position_[polygon[i]];
-  // Per pair i < j: the table's entry (i, j) at i * m + j, and a second copy at j * m + i, so that
-  // the loop over k reads both of its sub-polygons' entries, (i, k) and (k, j), along a row: by
-  // columns, a polygon of 500 corners (1 MB per table) missed the cache on every k, and its
-  // triangulation took most of the meshing (armadillo with 1% of its faces gone -> 10 proxies: 30 s).
-  // The values and the order of the comparisons are as before: the same triangulations.
-  // Edge lengths and which diagonals are free, once per pair.
-  std::vector<double> len(size_t(m) * m);
+  std::vector<Vec3> corners(m);
+  for (uint32_t i = 0; i < m; ++i) {
+    const V3 a = anchor_position_[polygon[i]];
+    corners[i] = {a.x, a.y, a.z};
+  }
   std::vector<uint8_t> allowed(size_t(m) * m, 1);
   for (uint32_t i = 0; i < m; ++i)
-    for (uint32_t j = i + 1; j < m; ++j) {
-      len[size_t(i) * m + j] = len[size_t(j) * m + i] = length(p[j] - p[i]);
-      if (j != i + 1 && !(i == 0 && j == m - 1))
+    for (uint32_t j = i + 2; j < m; ++j)
+      if (!(i == 0 && j == m - 1))
         allowed[size_t(i) * m + j] = allowed[size_t(j) * m + i] = diagonal_free(polygon[i], polygon[j]);
-    }
-  const uint32_t kWorst = std::numeric_limits<uint32_t>::max();
-  std::vector<uint32_t> cost(size_t(m) * m, kWorst), choice(size_t(m) * m, kNone);
-  std::vector<double> quality(size_t(m) * m, -1.0);
-  for (uint32_t i = 0; i + 1 < m; ++i) {
-    cost[size_t(i) * m + i + 1] = cost[size_t(i + 1) * m + i] = 0;
-    quality[size_t(i) * m + i + 1] = quality[size_t(i + 1) * m + i] = std::numeric_limits<double>::infinity();
-  }
-  for (uint32_t span = 2; span < m; ++span)
-    for (uint32_t i = 0; i + span < m; ++i) {
-      const uint32_t j = i + span;
-      const size_t ij = size_t(i) * m + j;
-      const size_t row_i = size_t(i) * m, row_j = size_t(j) * m;  // (i, k) at row_i + k, (k, j) at row_j + k
-      uint32_t best_cost = cost[ij];
-      double best_quality = quality[ij];
-      uint32_t best_k = kNone;
-      for (uint32_t k = i + 1; k < j; ++k) {
-        const size_t ik = row_i + k, kj = row_j + k;
-        uint32_t c = cost[ik] + cost[kj];
-        double q = std::min(quality[ik], quality[kj]);
-        if (c > best_cost || (c == best_cost && !(q > best_quality))) continue;  // cannot do better
-        if (!allowed[ik] || !allowed[kj]) c += m;
-        // As faces_along and min_angle_sine, with the lengths from the table.
-        V3 cr = cross(p[k] - p[i], p[j] - p[i]);
-        double area2 = length(cr);
-        double lik = len[ik], lkj = len[kj], lij = len[ij];
-        double big = std::max({lkj * lij, lij * lik, lik * lkj});
-        double sine = big > 0 ? area2 / big : 0.0;
-        if (sine > kMinSine && (any_direction || dot(cr, n) > kMinFacingCosine * area2))
-          q = std::min(q, sine);
-        else
-          ++c;
-        if (c < best_cost || (c == best_cost && q > best_quality)) best_cost = c, best_quality = q, best_k = k;
-      }
-      assert(best_k != kNone);  // the first k always beats kWorst
-      cost[ij] = cost[row_j + i] = best_cost;
-      quality[ij] = quality[row_j + i] = best_quality;
-      choice[ij] = best_k;
-    }
-  std::vector<std::pair<uint32_t, uint32_t>> stack{{0, m - 1}};
-  while (!stack.empty()) {
-    auto [i, j] = stack.back();
-    stack.pop_back();
-    if (j < i + 2) continue;
-    uint32_t k = choice[size_t(i) * m + j];
-    tris.insert(tris.end(), {polygon[i], polygon[k], polygon[j]});
-    stack.push_back({i, k});
-    stack.push_back({k, j});
-  }
-  return cost[m - 1];
+  const uint32_t cost = meshcvt::triangulate_polygon(corners, {n.x, n.y, n.z}, allowed,
+                                                     {.min_sine = kMinSine, .min_facing_cosine = kMinFacingCosine},
+                                                     &pool_, tris);
+  for (uint32_t& t : tris) t = polygon[t];
+  return cost;
 }
 
 bool Mesher::same_polygon(const std::vector<uint32_t>& ids, const std::vector<V3>& positions,
