@@ -21,6 +21,7 @@
 // Every array is reached through its buffer device address, so none is limited by
 // maxStorageBufferRange; Buffer checks the memory budget before each allocation.
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cstring>
 #include <map>
@@ -431,10 +432,15 @@ const std::vector<uint32_t>& GpuIteration::labels() const {
 
 }  // namespace
 
+static std::atomic<uint64_t> g_gpu_engine_setups{0};
+
 std::unique_ptr<IterationEngine> make_gpu_iteration(const ClusterProblem& problem, const Mesh& mesh,
                                                     const Topology& topology, TopologyMode mode, bool accelerate,
                                                     int device_index) {
+  g_gpu_engine_setups.fetch_add(1, std::memory_order_relaxed);
   return std::make_unique<GpuIteration>(problem, mesh, topology, mode, accelerate, device_index);
 }
+
+uint64_t gpu_engine_setups() { return g_gpu_engine_setups.load(std::memory_order_relaxed); }
 
 }  // namespace meshcvt

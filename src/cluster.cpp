@@ -216,10 +216,12 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
     return cluster_without_collapsed_faces(mesh, topology, options);
   auto t_start = Clock::now();
   DeviceChoice choice;
+  bool no_gpu_to_be_had = false;
   try {
     choice = resolve_device_for_mesh(options.device, mesh.face_count());
   } catch (const DeviceError& e) {  // no loader, no such device, none usable
     if (!options.cpu_fallback) throw;
+    no_gpu_to_be_had = true;
     choice.description = "cpu";
     choice.notice = "using the CPU engine, not " +
                     (options.device.empty() ? std::string("the device $MESHCVT_DEVICE names")
@@ -229,6 +231,7 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
 
   Clustering out;
   out.device_notice = choice.notice;
+  out.fell_back = no_gpu_to_be_had;
   WorkerPool pool(options.threads);
   ClusterProblem problem = make_cluster_problem(mesh, options, &pool);
   // L2,1 compares the faces' normals: on a mesh whose triangles are ordered at random (libcgal-demo's
@@ -261,6 +264,7 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
     if (!may_fall_back || !on_gpu) throw;
     // (reason(): the error's advice, "try --device cpu", is what happens here already)
     out.device_notice = "using the CPU engine: the GPU engine on " + choice.description + " failed: " + e.reason();
+    out.fell_back = true;
     engine.reset();  // (the GPU's buffers go before the CPU engine's arrays come)
     engine = make_cpu();
     on_gpu = false;

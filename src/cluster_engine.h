@@ -156,6 +156,10 @@ std::unique_ptr<IterationEngine> make_gpu_iteration(const ClusterProblem& proble
                                                     const Topology& topology, TopologyMode mode, bool accelerate,
                                                     int device_index);
 
+/// How many times make_gpu_iteration was called in this process (set-ups tried, failed or not):
+/// tests see from it whether a job went to the GPU again after it failed over to the CPU.
+uint64_t gpu_engine_setups();
+
 /// The boundary-testing iteration on the CPU (Section 3.1 with configuration-wise updating and the
 /// accelerators of 5.2). Holds labels, sums and generators; step() runs one iteration.
 class BoundaryIteration final : public IterationEngine {

@@ -2137,6 +2137,12 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
   auto t = Clock::now();
   Clustering clustering = cluster(mesh, topology, co);
   out.cluster_seconds = seconds_since(t);
+  // Where the GPU failed over to the CPU engine, the fix loop's clusterings below would set it up
+  // again, and likely see it fail again (an out-of-memory setup fails in every round): they ask for
+  // the CPU engine, whose labels are the GPU engine's anyway. The notice stays with the result.
+  const bool fell_back = clustering.fell_back;
+  const std::string fallback_notice = clustering.device_notice;
+  if (fell_back) co.device = "cpu";
 
   // The coarse mesh of the clustering as it is: its defects are what the fix loop starts from, and
   // without any it is the result (finding the defects is building it, so it is built once).
@@ -2391,6 +2397,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
   }
   out.defects_remain = !out.coarse.defects.empty();
   out.clustering = std::move(clustering);
+  if (fell_back) out.clustering.fell_back = true, out.clustering.device_notice = fallback_notice;
   return out;
 }
 

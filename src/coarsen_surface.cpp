@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -438,6 +439,16 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
 
   const bool prepare = options.gradation == 0;
   JobRun run = run_job(std::move(mesh), density, origin, options, prepare);
+  // Where the GPU failed over to the CPU engine (coarsen_mesh), the other surfaces below are
+  // clustered on the CPU engine from the start; the job kept says why.
+  std::optional<CoarsenSurfaceOptions> on_cpu;
+  const bool fell_back = run.job.clustering.fell_back;
+  const std::string fallback_notice = run.job.clustering.device_notice;
+  if (fell_back) {
+    on_cpu = options;
+    on_cpu->job.cluster.device = "cpu";
+  }
+  const CoarsenSurfaceOptions& later = on_cpu ? *on_cpu : options;
   // Where the coarse mesh keeps defects, other surfaces are tried, each kept only if its coarse
   // mesh has fewer defects than the best so far (result.jobs lists them).
   JobRun as_given;  // the input as given's job, where it ran after a split and was not kept
@@ -469,7 +480,7 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
       if (partial.split_edges > 0 && partial.mesh.face_count() >= n) {
         const uint64_t partial_edges = partial.split_edges;
         if (keep_if_better(run_job(std::move(partial.mesh), inherited(unsplit_density, partial.parent),
-                                   inherited(unsplit_origin, partial.parent), options, prepare),
+                                   inherited(unsplit_origin, partial.parent), later, prepare),
                            CoarsenSurfaceJob::partly_split)) {
           result.split_edges = partial_edges;
           result.unsplit_components = broken.components;
@@ -477,7 +488,7 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
       }
     }
     if (run.job.defects_remain) {
-      JobRun plain = run_job(std::move(unsplit), unsplit_density, unsplit_origin, options, prepare);
+      JobRun plain = run_job(std::move(unsplit), unsplit_density, unsplit_origin, later, prepare);
       if (keep_if_better(std::move(plain), CoarsenSurfaceJob::as_given)) {
         result.split_discarded = true;
         result.split_ratio = 0;
@@ -500,7 +511,7 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
       4 * uint64_t(base.surface.face_count()) <= options.max_retry_faces) {
     // Its density and origins (reordered with its surface), to the children.
     if (keep_if_better(run_job(subdivide_midpoint(base.surface, 1, options.job.cluster.threads), to_children(base.density, 1),
-                               to_children(base.origin, 1), options, prepare),
+                               to_children(base.origin, 1), later, prepare),
                        CoarsenSurfaceJob::subdivided)) {
       result.retried_subdivided = true;
       if (&base == &as_given) {  // (else the surface subdivided is the one kept, split as it was)
@@ -531,6 +542,7 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
   result.surface = std::move(run.surface);
   result.topology = std::move(run.topology);
   result.job = std::move(run.job);
+  if (fell_back) result.job.clustering.fell_back = true, result.job.clustering.device_notice = fallback_notice;
   return result;
 }
 

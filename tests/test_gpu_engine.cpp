@@ -17,6 +17,7 @@
 #include "cluster_engine.h"
 #include "gpu_test_device.h"
 #include "meshcvt/cluster.h"
+#include "meshcvt/coarsen.h"
 #include "meshcvt/density.h"
 #include "meshcvt/device.h"
 #include "meshcvt/error.h"
@@ -334,6 +335,7 @@ TEST_CASE("gpu engine: a lost device or exhausted memory is a DeviceError, or wi
       CHECK(fell_back.device == cpu.device);
       CHECK(fell_back.device_notice.find("using the CPU engine") == 0);
       CHECK(fell_back.device_notice.find(fault.result) != std::string::npos);
+      CHECK(fell_back.fell_back);
       // It ran on the CPU: the error's advice to do so is left out.
       CHECK(fell_back.device_notice.find("--device cpu") == std::string::npos);
       check_same_clustering(fell_back, cpu);
@@ -349,6 +351,34 @@ TEST_CASE("gpu engine: a lost device or exhausted memory is a DeviceError, or wi
     CHECK_THROWS_AS(cluster(elephant, o), OptionError);  // a typo is not a device failure
   }
   CHECK(vk::validation_message_count() == messages_before);
+}
+
+// coarsen_mesh clusters again in its fix rounds: after the GPU failed over once, those go to the CPU
+// engine directly (one GPU set-up in all, not one per round), and the result, notice included, is
+// the one a job that stayed on the CPU gives.
+TEST_CASE("gpu engine: coarsen_mesh sets a GPU that failed over up once, not once per fix round") {
+  if (test::skip_gpu_tests()) return;
+  int(test::gpu_test_device());
+  Mesh elephant = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
+  const Topology topology = build_topology(elephant);
+  CoarsenMeshOptions o;
+  o.cluster.clusters = 300;
+  o.cluster.device = "cpu";
+  const CoarsenMeshResult cpu = coarsen_mesh(elephant, topology, o);
+  REQUIRE(cpu.fix_rounds > 1);  // clusterings after the first, which the fallback must not retry
+  o.cluster.device = "gpu";
+  o.cluster.cpu_fallback = true;
+  test::ScopedEnv armed("MESHCVT_GPU_FAULT", "memory:1");
+  const uint64_t setups_before = gpu_engine_setups();
+  const CoarsenMeshResult fell_back = coarsen_mesh(elephant, topology, o);
+  CHECK(gpu_engine_setups() - setups_before == 1);
+  CHECK(fell_back.clustering.fell_back);
+  CHECK(!cpu.clustering.fell_back);
+  CHECK(fell_back.clustering.device_notice.find("VK_ERROR_OUT_OF_DEVICE_MEMORY") != std::string::npos);
+  CHECK(fell_back.fix_rounds == cpu.fix_rounds);
+  CHECK(fell_back.clustering.labels == cpu.clustering.labels);
+  CHECK(fell_back.coarse.mesh.positions == cpu.coarse.mesh.positions);
+  CHECK(fell_back.coarse.mesh.indices == cpu.coarse.mesh.indices);
 }
 
 // cpu_fallback also covers a GPU that cannot be had at all (no loader, no device, no such index):
@@ -367,7 +397,9 @@ TEST_CASE("cluster(): cpu_fallback runs on the CPU when the GPU asked for does n
   CHECK(fell_back.device == cpu.device);
   CHECK(fell_back.device_notice.find("using the CPU engine") == 0);
   CHECK(fell_back.device_notice.find("gpu:99") != std::string::npos);
+  CHECK(fell_back.fell_back);
   CHECK(cpu.device_notice.empty());
+  CHECK(!cpu.fell_back);
   check_same_clustering(fell_back, cpu);
   o.device = "bogus";  // a misspelt request is the caller's mistake, not a missing GPU
   o.cpu_fallback = true;

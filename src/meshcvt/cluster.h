@@ -129,6 +129,11 @@ struct Clustering {
   /// lacks a feature, or none where the machine seemed to have one (no loader, no device), or the
   /// GPU engine failed and fell back (ClusterOptions::cpu_fallback); else empty.
   std::string device_notice;
+  /// The CPU engine ran because the GPU asked for failed or could not be had, and the job went on
+  /// (a GPU that "auto" chose, or ClusterOptions::cpu_fallback; device_notice says why). A caller
+  /// that clusters the same mesh again (coarsen's fix loop) asks for "cpu" from then on rather
+  /// than set the failing GPU up again.
+  bool fell_back = false;
 };
 
 /// Clusters the faces of `mesh` into exactly options.clusters connected clusters.
