@@ -10,7 +10,7 @@
 // polygons, 109 of them with 512 to 800 corners, 6e9 steps of the loop over k):
 //  * each pair's entries are kept twice, at (i, j) and (j, i), so that the loop over k reads the
 //    entries of (i, k) and (k, j) both along a row (by columns a polygon of 500 corners missed the
-//    cache on every k: 30 s for that job, 17.7 s after);
+//    cache on every k: another armadillo with holes took 27.7 s, 17.7 s after, bench/RESULTS.md);
 //  * 97% of the k are rejected by the first test, on the two sub-polygons' cost and quality alone,
 //    before any geometry;
 //  * the pairs go in tiles of kTile x kTile: pair (i, j) reads only pairs (i, k) and (k, j) with
@@ -18,8 +18,8 @@
 //    of a nearer diagonal of tiles. The tiles of one diagonal are independent, so a pool fills them
 //    side by side with one wait per diagonal (a wait per span of pairs, 500 of them per polygon,
 //    cost more than the second core gave). Every pair reads the same entries and takes them in the
-//    same order whatever the tiling and the thread count: the same triangulation (that job: 9.8 s
-//    on one thread, 5.3 s on two).
+//    same order whatever the tiling and the thread count: the same triangulation (the armadillo
+//    above: 9.8 s before the tiles, 5.3 s with them on two threads).
 #include "polygon_triangulation.h"
 
 #include <algorithm>
