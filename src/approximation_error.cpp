@@ -181,7 +181,15 @@ class OneSidedJob {
       // one's distance from the start; a bounded query skips more of the tree and returns the
       // same hit as an unbounded one (the bound is never below the true distance).
       TriangleBvh::Hit hit;
-      if (previous_face != kNone) hit = to_.closest_point(q, face_distance2(to_mesh_, previous_face, q));
+      if (previous_face != kNone) {
+        const double bound2 = face_distance2(to_mesh_, previous_face, q);
+        // A vertex counts only towards the largest distance: one no farther than the chunk's
+        // largest so far changes nothing, and its distance is at most the bound's. Most vertices
+        // of a fine mesh end here, without a query (the 4.8M bunny against its 10k coarsening:
+        // 2.4M vertices). The chunk's maximum is the same as with every query made.
+        if (!is_sample && std::sqrt(bound2) <= r.max) continue;
+        hit = to_.closest_point(q, bound2);
+      }
       assert(previous_face == kNone || hit.face != kNone);  // the previous face itself is within the bound
       if (hit.face == kNone) hit = to_.closest_point(q);
       previous_face = hit.face;

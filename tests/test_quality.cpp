@@ -219,6 +219,32 @@ TEST_CASE("approximation_error: one surface contained in the other, in the same 
   }
 }
 
+TEST_CASE("approximation_error: the largest distance at a lone vertex among many nearer ones") {
+  // A fine grid with three interior vertices raised to different heights, against the flat square:
+  // the largest distance is the highest vertex's height, reached at that vertex alone (the samples
+  // around it lie lower on its pyramid), and the thousands of vertices nearer the plane must not
+  // hide it, whichever comes first in the measuring order.
+  const int n = 60;
+  Mesh fine = grid(n, 0, 1, 0, 1, 0), flat = grid(1, 0, 1, 0, 1, 0);
+  const float heights[3] = {0.125f, 0.3f, 0.2f};
+  const int raised[3] = {5 * (n + 1) + 7, 33 * (n + 1) + 41, 52 * (n + 1) + 12};
+  for (int k = 0; k < 3; ++k) fine.positions[3 * size_t(raised[k]) + 2] = heights[k];
+  const double highest = double(0.3f);
+  for (unsigned threads : {1u, 2u}) {
+    CAPTURE(threads);
+    // The fine mesh measured (its tree is the larger) and as the reference, 3000 samples each, so
+    // that the vertices make most of the points.
+    meshcvt::ApproximationError e = meshcvt::approximation_error(fine, flat, 3000, threads);
+    CHECK(e.a_to_b_max == highest);
+    CHECK(e.b_to_a_max < 0.05);  // the flat square's points under a pyramid, near its slopes
+    meshcvt::ApproximationError swapped = meshcvt::approximation_error(flat, fine, 3000, threads);
+    CHECK(swapped.b_to_a_max == highest);
+    CHECK(swapped.hausdorff == highest);
+    // The samples alone miss the apex: the RMS stays far below it.
+    CHECK(swapped.b_to_a_rms < 0.05);
+  }
+}
+
 TEST_CASE("approximation_error: the same numbers for any thread count, different for another seed") {
   Mesh a = octahedron(), ref = tetrahedron();
   meshcvt::ApproximationError one = meshcvt::approximation_error(a, ref, 50000, 1);
