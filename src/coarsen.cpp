@@ -1110,6 +1110,14 @@ CoarsenResult coarsen_clustering(const Mesh& mesh, const Topology& topology, con
     result.unfolded_vertices += detail::unfold_toward_surface(result.mesh, surface);
     if (options.fit_min_angle_deg > 0)
       result.angle_floor_moves = detail::widen_toward_surface(result.mesh, surface, options.fit_min_angle_deg, mesh, labels);
+    // Last, the slivers' flips alone. The fitting pulls points onto creases, and three of them in
+    // a row along one leave a cap between them that no move widens; the flip of its long edge
+    // sweeps almost no volume, so the distance to the input barely moves (fandisk -> 6000: smallest
+    // angle 0.76 -> 16.6 degrees, angles below 30 81 -> 51, RMS +0.3%, Hausdorff the same: 55
+    // flips). A dihedral allowance of 0 flips nothing else but pairs in one plane to the last
+    // bit, whose flip moves no surface. At faces / 40 no libcgal-demo mesh changes.
+    if (options.flip_edges)
+      result.flipped_edges += flip_coarse_edges(result.mesh, 0.0, /*max_passes=*/8, /*flat_slivers=*/true);
   }
   return result;
 }

@@ -976,6 +976,30 @@ TEST_CASE("coarsen: on a curved surface qem's edge swaps make no more thin trian
     }
 }
 
+TEST_CASE("coarsen: qem leaves no sliver that a flip sweeping almost nothing would remove") {
+  // At 2400 clusters on the elephant of tests/data (subdivided twice first, as for any qem job
+  // with few faces per cluster), the fitting puts three points in a row on a ridge: a 3-degree
+  // cap. Its long edge's flip sweeps almost no volume, so it is made after the fitting, and the
+  // distance to the input does not grow.
+  const Mesh elephant = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
+  CoarsenSurfaceOptions options;
+  options.job.cluster.clusters = 2400;
+  options.job.coarsen.placement = VertexPlacement::qem;
+  const CoarsenSurfaceResult r = coarsen_surface(elephant, options);
+  const Mesh& coarse = r.job.coarse.mesh;
+  REQUIRE(!r.job.defects_remain);
+  REQUIRE(coarse.vertex_count() == 2400);
+  Mesh again = coarse;
+  CHECK(flip_coarse_edges(again, 0, 8, /*flat_slivers=*/true) == 0);
+  CHECK(triangle_quality(coarse).min_angle_deg > 5);
+  // The flips keep the mesh what it was: closed, the input's genus, consistently oriented.
+  const MeshInfo info = mesh_info(coarse, build_topology(coarse));
+  CHECK(info.euler_characteristic == mesh_info(elephant, build_topology(elephant)).euler_characteristic);
+  CHECK(info.boundary_loops == 0);
+  CHECK(info.nonmanifold_edges == 0);
+  CHECK(info.orientation_flips == 0);
+}
+
 // Triangles of `coarse` facing against the same triangles with their corners at `surface`.
 size_t turned_over_triangles(const Mesh& coarse, const std::vector<float>& surface) {
   size_t count = 0;
@@ -1029,8 +1053,9 @@ TEST_CASE("coarsen: qem points never turn a coarse triangle over") {
 TEST_CASE("coarsen: qem's thin triangles widen toward the surface at little cost in distance") {
   // Last, the corners of triangles below fit_min_angle_deg (default 20) move part of the way back
   // toward their projected points where that lifts their smallest angle and keeps their
-  // neighbourhood's squared distance to the input within 1.1x. Off (0), qem kept triangles of
-  // 6.0, 2.4 and 3.8 degrees at these counts.
+  // neighbourhood's squared distance to the input within 1.1x. Off (0), qem keeps triangles of
+  // 6.0, 2.4 and 10.2 degrees at these counts (at 500 the last sliver flips lift a 3.8-degree cap;
+  // the widening takes that count to 16.0 degrees).
   const Mesh elephant = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
   const Topology topology = build_topology(elephant);
   for (uint32_t clusters : {100u, 200u, 500u}) {
@@ -1044,7 +1069,7 @@ TEST_CASE("coarsen: qem's thin triangles widen toward the surface at little cost
     CHECK(thin.angle_floor_moves == 0);
     CHECK(widened.coarse.angle_floor_moves > 0);
     const TriangleQuality before = triangle_quality(thin.mesh), after = triangle_quality(widened.coarse.mesh);
-    CHECK(before.min_angle_deg < 10);
+    CHECK(before.min_angle_deg < 12);
     CHECK(after.min_angle_deg > before.min_angle_deg + 5);
     CHECK(after.angles_below_30 <= before.angles_below_30);
     CHECK(approximation_error(widened.coarse.mesh, elephant).rms < 1.03 * approximation_error(thin.mesh, elephant).rms);
