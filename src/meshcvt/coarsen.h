@@ -49,7 +49,8 @@ enum class VertexPlacement {
   /// of a triangle that faces against the same triangle on the `projected` points (the qem points
   /// turned it over) move toward their projected points: half, a quarter, then all the way, until
   /// no triangle is turned over. Then CoarsenOptions::fit_passes, the same unfolding again for the
-  /// triangles its edge swaps made, and CoarsenOptions::fit_min_angle_deg.
+  /// triangles its edge swaps made, CoarsenOptions::fit_min_angle_deg, and the slivers' flips
+  /// (CoarsenOptions::flip_edges).
   qem,
 };
 
@@ -66,6 +67,8 @@ struct CoarsenOptions {
   /// within `flip_max_dihedral_deg`; for `closest` and `projected` also a sliver's pair where the
   /// flip barely moves the surface) whenever that raises the smaller of their minimum angles (see
   /// flip_coarse_edges). Vertices, topology and orientation are kept. Only when the dual has no defect.
+  /// With `qem`, also the slivers' flips alone (no dihedral allowance) after the fitting: caps of
+  /// three points in a row on a crease, which no move widens.
   bool flip_edges = true;
   double flip_max_dihedral_deg = 25;
   /// After the flips: passes of relax_coarse_vertices (0 = off), then the flips again. Moves
