@@ -222,11 +222,11 @@ TEST_CASE("approximation_error: one surface contained in the other, in the same 
 TEST_CASE("approximation_error: the largest distance at a lone vertex among many nearer ones") {
   // A fine grid with three interior vertices raised to different heights, against the flat square:
   // the largest distance is the highest vertex's height, reached at that vertex alone (the samples
-  // around it lie lower on its pyramid), and the thousands of vertices nearer the plane must not
-  // hide it, whichever comes first in the measuring order.
+  // around it lie lower on its pyramid). The thousands of vertices nearer the plane must not hide
+  // it, nor the lower raised vertex measured just before it among the vertices.
   const int n = 60;
   Mesh fine = grid(n, 0, 1, 0, 1, 0), flat = grid(1, 0, 1, 0, 1, 0);
-  const float heights[3] = {0.125f, 0.3f, 0.2f};
+  const float heights[3] = {0.125f, 0.2f, 0.3f};
   const int raised[3] = {5 * (n + 1) + 7, 33 * (n + 1) + 41, 52 * (n + 1) + 12};
   for (int k = 0; k < 3; ++k) fine.positions[3 * size_t(raised[k]) + 2] = heights[k];
   const double highest = double(0.3f);
