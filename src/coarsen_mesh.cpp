@@ -2258,88 +2258,104 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
       back.fixes = std::move(result.fixes);
       result = std::move(back);
     }
-    // Last resort for small broken components: one cluster per face (a valid clustering of a
-    // manifold: faces are disks, two faces share at most one edge, vertices have valence >= 3)
-    // merged down to the component's count the same way. First only around the defects of the
-    // finer clustering that left the component the fewest (its clusters in a defect and their
+    // Last resort for broken components: one cluster per face (a valid clustering of a manifold:
+    // faces are disks, two faces share at most one edge, vertices have valence >= 3) merged down
+    // to the component's count the same way. First only around the defects of the finer
+    // clustering that left the component the fewest (its clusters in a defect and their
     // neighbours in single faces, the others kept): libcgal-demo's cheese -> 444 merges 3314
     // times instead of 39538 (fixes 0.89 -> 0.65 s, Q avg 0.717 -> 0.745, angles below 30
     // 332 -> 216), polygon_mesh -> 3224 3313 instead of 29021 (0.72 -> 0.22 s); over libcgal-demo
     // at faces / 10 and / 40, 6 and 8 defects fewer, 23 and 156 angles below 30 fewer (boeing ->
     // 64 loses: Q avg 0.62 -> 0.58). Where that leaves as many defects, every face.
-    std::vector<uint32_t> broken = broken_manifolds(result.labels, n, result.defects);
-    uint32_t selected = 0;
-    std::vector<uint32_t> targets = clusters_per_component(topology, result.labels, n);
-    std::vector<uint8_t> face_start(topology.component_count, 0);  // rebuilt from single faces
+    // Each start takes components smallest first (ties: lower id) while what it merges from stays
+    // within max_face_start_faces in all (a component that would pass it, and those after it, are
+    // not taken): every face of the component from single faces; the finer clusters kept plus the
+    // faces made single from a finer clustering. The latter grows with the defects, not with the
+    // component: libcgal-demo's femur -> 1949 with qem (subdivided twice to 125k faces) is rebuilt
+    // from 8957 clusters; when the limit counted the component's faces, 3 defects remained.
+    const std::vector<uint32_t> broken = broken_manifolds(result.labels, n, result.defects);
+    std::vector<uint32_t> component_offsets(topology.component_count + 1, 0), component_faces(result.labels.size());
+    for (uint32_t c : topology.face_component) ++component_offsets[c + 1];
+    for (uint32_t c = 0; c < topology.component_count; ++c) component_offsets[c + 1] += component_offsets[c];
     {
-      std::vector<uint32_t> candidates;  // broken, smallest first (ties: lower id)
-      for (uint32_t c = 0; c < topology.component_count; ++c)
-        if (broken[c] > 0) candidates.push_back(c);
-      std::stable_sort(candidates.begin(), candidates.end(), [&](uint32_t x, uint32_t y) {
-        return out.allocation.faces[x] < out.allocation.faces[y];
-      });
+      std::vector<uint32_t> fill(component_offsets.begin(), component_offsets.end() - 1);
+      for (size_t f = 0; f < result.labels.size(); ++f) component_faces[fill[topology.face_component[f]]++] = uint32_t(f);
+    }
+    auto faces_of = [&](uint32_t c) {
+      return std::span<const uint32_t>(component_faces.data() + component_offsets[c],
+                                       component_offsets[c + 1] - component_offsets[c]);
+    };
+    // Per cluster of the finer clustering that left component c the fewest defects: 1 when its faces
+    // become single faces (in a defect, or next to a cluster in one).
+    auto single_clusters = [&](uint32_t c) {
+      const FineStart& start = fine_starts[best_fine[c]];
+      std::vector<uint8_t> core(start.clusters, 0);
+      for (const DualDefect& d : start.defects)
+        for (uint32_t k : {d.cluster, d.other, d.third})
+          if (k < start.clusters) core[k] = 1;
+      std::vector<uint8_t> single = core;
+      for (uint32_t f : faces_of(c)) {
+        if (!core[start.labels[f]]) continue;
+        for (int e = 0; e < 3; ++e) {
+          const uint32_t g = topology.face_adjacent[3 * size_t(f) + e];
+          if (g != kNone) single[start.labels[g]] = 1;
+        }
+      }
+      return single;
+    };
+    std::vector<uint32_t> candidates;  // broken, smallest first (ties: lower id)
+    for (uint32_t c = 0; c < topology.component_count; ++c)
+      if (broken[c] > 0) candidates.push_back(c);
+    std::stable_sort(candidates.begin(), candidates.end(), [&](uint32_t x, uint32_t y) {
+      return out.allocation.faces[x] < out.allocation.faces[y];
+    });
+    for (int from_fine = fine_starts.empty() ? 0 : 1; !candidates.empty() && from_fine >= 0; --from_fine) {
+      std::vector<uint32_t> direct = result.labels;
+      std::vector<uint32_t> targets = clusters_per_component(topology, result.labels, n);
+      std::vector<uint8_t> face_start(topology.component_count, 0);  // rebuilt from this start
+      // Selected in order of size; numbered in component order, as the merge's ties go by id.
+      uint32_t selected = 0;
       uint64_t taken = 0;
       for (uint32_t c : candidates) {
-        if (taken + out.allocation.faces[c] > options.max_face_start_faces) break;
-        taken += out.allocation.faces[c];
+        uint64_t units = faces_of(c).size();
+        if (from_fine && best_fine[c] != kNone) {
+          const std::vector<uint32_t>& fine = fine_starts[best_fine[c]].labels;
+          const std::vector<uint8_t> single = single_clusters(c);
+          std::vector<uint8_t> seen(single.size(), 0);
+          units = 0;
+          for (uint32_t f : faces_of(c)) {
+            const uint32_t l = fine[f];
+            if (single[l] || !seen[l]) ++units;
+            seen[l] = 1;
+          }
+        }
+        if (taken + units > options.max_face_start_faces) break;
+        taken += units;
         face_start[c] = 1;
         targets[c] = out.allocation.clusters[c];
         ++selected;
       }
-    }
-    // First from the best finer clustering, where one was kept: its clusters in a defect and their
-    // neighbours become single faces, the others stay as they are; then, where that does not
-    // take, every face.
-    for (int from_fine = fine_starts.empty() ? 0 : 1; selected > 0 && from_fine >= 0; --from_fine) {
-      std::vector<uint32_t> direct = result.labels;
       uint32_t next_id = n;
-      if (from_fine) {
-        // The faces of each component (CSR), so that each is walked alone.
-        std::vector<uint32_t> component_offsets(topology.component_count + 1, 0), component_faces(direct.size());
-        for (uint32_t c : topology.face_component) ++component_offsets[c + 1];
-        for (uint32_t c = 0; c < topology.component_count; ++c) component_offsets[c + 1] += component_offsets[c];
-        {
-          std::vector<uint32_t> fill(component_offsets.begin(), component_offsets.end() - 1);
-          for (size_t f = 0; f < direct.size(); ++f) component_faces[fill[topology.face_component[f]]++] = uint32_t(f);
+      for (uint32_t c = 0; c < topology.component_count; ++c) {
+        if (!face_start[c]) continue;
+        if (!from_fine || best_fine[c] == kNone) {  // no finer clustering of it kept: single faces
+          for (uint32_t f : faces_of(c)) direct[f] = next_id++;
+          continue;
         }
-        std::vector<uint32_t> fresh;  // per fine cluster id: its id in direct, or kNone
-        std::vector<uint8_t> core, single;  // per fine cluster id: in a defect; made single faces
-        for (uint32_t c = 0; c < topology.component_count; ++c) {
-          if (!face_start[c]) continue;
-          const std::span<const uint32_t> own(component_faces.data() + component_offsets[c],
-                                              component_offsets[c + 1] - component_offsets[c]);
-          if (best_fine[c] == kNone) {  // no finer clustering of it kept: single faces
-            for (uint32_t f : own) direct[f] = next_id++;
-            continue;
-          }
-          const FineStart& start = fine_starts[best_fine[c]];
-          fresh.assign(start.clusters, kNone);
-          core.assign(start.clusters, 0);
-          for (const DualDefect& d : start.defects)
-            for (uint32_t k : {d.cluster, d.other, d.third})
-              if (k < start.clusters) core[k] = 1;
-          single = core;
-          for (uint32_t f : own) {
-            if (!core[start.labels[f]]) continue;
-            for (int e = 0; e < 3; ++e) {
-              const uint32_t g = topology.face_adjacent[3 * size_t(f) + e];
-              if (g != kNone) single[start.labels[g]] = 1;
-            }
-          }
-          for (uint32_t f : own) {
-            const uint32_t l = start.labels[f];
-            if (single[l]) {
-              direct[f] = next_id++;
-            } else {
-              if (fresh[l] == kNone) fresh[l] = next_id++;
-              direct[f] = fresh[l];
-            }
+        const FineStart& start = fine_starts[best_fine[c]];
+        const std::vector<uint8_t> single = single_clusters(c);
+        std::vector<uint32_t> fresh(start.clusters, kNone);  // per fine cluster id: its id in direct
+        for (uint32_t f : faces_of(c)) {
+          const uint32_t l = start.labels[f];
+          if (single[l]) {
+            direct[f] = next_id++;
+          } else {
+            if (fresh[l] == kNone) fresh[l] = next_id++;
+            direct[f] = fresh[l];
           }
         }
-      } else {
-        for (size_t f = 0; f < direct.size(); ++f)
-          if (face_start[topology.face_component[f]]) direct[f] = next_id++;
       }
+      if (selected == 0) continue;
       std::vector<uint32_t> start_counts = clusters_per_component(topology, direct, next_id);
       direct = merge_down_with_flips(mesh, topology, data, check, corners, boundary_loops, direct, next_id, targets,
                                      options.merge_budget_per_face, defects_of);
@@ -2351,7 +2367,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
         if (face_start[c] && held[c] == out.allocation.clusters[c]) {
           replace_component(topology, composed, direct, c);
           ++replaced;
-          replaced_from_finer += best_fine[c] != kNone;
+          replaced_from_finer += from_fine && best_fine[c] != kNone;
           merges += start_counts[c] - held[c];
         }
       if (replaced > 0) {
@@ -2361,7 +2377,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
         if (back.defects.size() < result.defects.size()) {
           out.merged_back += merges;
           out.face_start_components = replaced;
-          out.face_start_from_finer = from_fine ? replaced_from_finer : 0;
+          out.face_start_from_finer = replaced_from_finer;
           result.fixes.insert(result.fixes.end(), back.fixes.begin(), back.fixes.end());
           back.fixes = std::move(result.fixes);
           result = std::move(back);

@@ -567,6 +567,24 @@ TEST_CASE("coarsen_mesh: a component rebuilt from single faces is rebuilt around
   CHECK(r.face_start_from_finer == 1);
   CHECK(r.refined_clusters == 0);  // no finer clustering was merged back whole
   CHECK(r.merged_back < (m.face_count() - n) / 4);
+
+  // Its limit counts what it merges from (the finer clusters kept plus the faces made single),
+  // not the component's faces: a component far larger than the limit is still rebuilt so (the
+  // femur of libcgal-demo, subdivided to 125k faces for qem, was not). At that count it is
+  // rebuilt as before; one below, neither start takes it (single faces would need all its faces).
+  const uint64_t merged_from = r.merged_back + n;
+  REQUIRE(merged_from < m.face_count());
+  CoarsenMeshOptions o;
+  o.cluster.clusters = n;
+  o.cluster.device = "cpu";
+  o.max_face_start_faces = merged_from;
+  const CoarsenMeshResult at_limit = coarsen_mesh(m, build_topology(m), o);
+  CHECK(at_limit.face_start_from_finer == 1);
+  CHECK(at_limit.clustering.labels == r.clustering.labels);
+  o.max_face_start_faces = merged_from - 1;
+  const CoarsenMeshResult below = coarsen_mesh(m, build_topology(m), o);
+  CHECK(below.face_start_components == 0);
+  CHECK(below.defects_remain);
 }
 
 TEST_CASE("coarsen_mesh: faces with a repeated corner are left out and take a neighbour's cluster") {

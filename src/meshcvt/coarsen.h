@@ -365,10 +365,12 @@ struct CoarsenMeshOptions {
   /// Fix rounds at most per attempt (each attempt: rounds until no defect, see coarsen_mesh);
   /// 0 = no fixing at all, the defects are reported as coarsen_clustering does.
   uint32_t max_fix_rounds = 12;
-  /// Step 4 of coarsen_mesh: the faces, in all, of the broken components that may be rebuilt from
-  /// one cluster per face (smallest components first; a component that would pass the limit and
-  /// those after it are not). The merging's cost grows faster than its faces: polygon_mesh's 32k
-  /// faces take about 1.5 s.
+  /// Step 4 of coarsen_mesh: how many clusters, in all, the broken components rebuilt from single
+  /// faces may be merged down from (smallest components first; a component that would pass the
+  /// limit and those after it are not). From every face, that is the components' faces; from a
+  /// finer clustering, its clusters there plus the faces made single around its defects, so a
+  /// large component with few defects can still be rebuilt that way. The merging's cost grows
+  /// faster than what it merges: polygon_mesh's 32k faces take about 1.5 s.
   uint64_t max_face_start_faces = 65536;
   /// Step 4's work budget: faces checked (each candidate merge's two clusters) per face of the
   /// components merged down, per merging. Where it is spent the merging stops, and the components
@@ -446,10 +448,11 @@ struct CoarsenMeshResult {
 ///     triangulation without an edge used twice) and replaces them; where greedy merging stops
 ///     above n (near the fewest vertices the surface allows), a dual edge flip (a strip of faces
 ///     along a border handed to the cluster at its end) opens a merge again; then components
-///     still broken, smallest first up to max_face_start_faces in all, are rebuilt from single
-///     faces merged down the same way: first only around their defects in the finer clustering
-///     that left them the fewest (its clusters in a defect and their neighbours cut into single
-///     faces, the others kept), and where that does not remove defects, every face. The merging has a work budget (merge_budget_per_face
+///     still broken, smallest first while what they merge from stays within max_face_start_faces,
+///     are rebuilt from single faces merged down the same way: first only around their defects in
+///     the finer clustering that left them the fewest (its clusters in a defect and their
+///     neighbours cut into single faces, the others kept), and where that does not remove
+///     defects, every face. The merging has a work budget (merge_budget_per_face
 ///     faces checked per face merged): where it is spent, the components stay as they were. Fix
 ///     rounds that come back to labels they had before stop (a cycle);
 ///  5. coarsen_clustering of the clustering with the fewest defects.
