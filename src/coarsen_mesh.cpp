@@ -2314,13 +2314,15 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
       std::vector<uint32_t> targets = clusters_per_component(topology, result.labels, n);
       std::vector<uint8_t> face_start(topology.component_count, 0);  // rebuilt from this start
       // Selected in order of size; numbered in component order, as the merge's ties go by id.
+      std::vector<std::vector<uint8_t>> singles(topology.component_count);  // single_clusters(c), where taken
       uint32_t selected = 0;
       uint64_t taken = 0;
       for (uint32_t c : candidates) {
         uint64_t units = faces_of(c).size();
+        std::vector<uint8_t> single;
         if (from_fine && best_fine[c] != kNone) {
           const std::vector<uint32_t>& fine = fine_starts[best_fine[c]].labels;
-          const std::vector<uint8_t> single = single_clusters(c);
+          single = single_clusters(c);
           std::vector<uint8_t> seen(single.size(), 0);
           units = 0;
           for (uint32_t f : faces_of(c)) {
@@ -2332,6 +2334,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
         if (taken + units > options.max_face_start_faces) break;
         taken += units;
         face_start[c] = 1;
+        singles[c] = std::move(single);
         targets[c] = out.allocation.clusters[c];
         ++selected;
       }
@@ -2343,7 +2346,7 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
           continue;
         }
         const FineStart& start = fine_starts[best_fine[c]];
-        const std::vector<uint8_t> single = single_clusters(c);
+        const std::vector<uint8_t>& single = singles[c];
         std::vector<uint32_t> fresh(start.clusters, kNone);  // per fine cluster id: its id in direct
         for (uint32_t f : faces_of(c)) {
           const uint32_t l = start.labels[f];
