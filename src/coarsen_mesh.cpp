@@ -111,6 +111,18 @@ uint32_t surface_minimum(int64_t chi, uint64_t loops, bool manifold, bool orient
   return uint32_t(std::max<int64_t>(3 * int64_t(loops), capped));
 }
 
+// The faces of each component, in face order, as CSR: component c's are
+// faces[offsets[c], offsets[c + 1]).
+void component_face_lists(const Topology& topology, std::vector<uint32_t>& offsets, std::vector<uint32_t>& faces) {
+  const size_t face_count = topology.face_component.size();
+  offsets.assign(size_t(topology.component_count) + 1, 0);
+  faces.resize(face_count);
+  for (size_t f = 0; f < face_count; ++f) ++offsets[topology.face_component[f] + 1];
+  for (uint32_t c = 0; c < topology.component_count; ++c) offsets[c + 1] += offsets[c];
+  std::vector<uint32_t> cursor(offsets.begin(), offsets.end() - 1);
+  for (size_t f = 0; f < face_count; ++f) faces[cursor[topology.face_component[f]]++] = uint32_t(f);
+}
+
 // Faces, chi, loops and the minimum of every component, each component judged on its own.
 void fill_components(const Mesh& mesh, const Topology& topology, ComponentAllocation& a) {
   const uint32_t nc = topology.component_count;
@@ -140,11 +152,8 @@ void fill_components(const Mesh& mesh, const Topology& topology, ComponentAlloca
     return;
   }
   // Several components: each one copied out and measured alone (O(F + V) in all).
-  std::vector<uint32_t> offsets(size_t(nc) + 1, 0), faces(mesh.face_count());
-  for (size_t f = 0; f < mesh.face_count(); ++f) ++offsets[topology.face_component[f] + 1];
-  for (uint32_t c = 0; c < nc; ++c) offsets[c + 1] += offsets[c];
-  std::vector<uint32_t> cursor(offsets.begin(), offsets.end() - 1);
-  for (size_t f = 0; f < mesh.face_count(); ++f) faces[cursor[topology.face_component[f]]++] = uint32_t(f);
+  std::vector<uint32_t> offsets, faces;
+  component_face_lists(topology, offsets, faces);
   std::vector<uint32_t> vertex_map(mesh.vertex_count(), kNone), used;
   for (uint32_t c = 0; c < nc; ++c) {
     Mesh part;
@@ -2274,13 +2283,8 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
     // component: libcgal-demo's femur -> 1949 with qem (subdivided twice to 125k faces) is rebuilt
     // from 8957 clusters; when the limit counted the component's faces, 3 defects remained.
     const std::vector<uint32_t> broken = broken_manifolds(result.labels, n, result.defects);
-    std::vector<uint32_t> component_offsets(topology.component_count + 1, 0), component_faces(result.labels.size());
-    for (uint32_t c : topology.face_component) ++component_offsets[c + 1];
-    for (uint32_t c = 0; c < topology.component_count; ++c) component_offsets[c + 1] += component_offsets[c];
-    {
-      std::vector<uint32_t> fill(component_offsets.begin(), component_offsets.end() - 1);
-      for (size_t f = 0; f < result.labels.size(); ++f) component_faces[fill[topology.face_component[f]]++] = uint32_t(f);
-    }
+    std::vector<uint32_t> component_offsets, component_faces;
+    component_face_lists(topology, component_offsets, component_faces);
     auto faces_of = [&](uint32_t c) {
       return std::span<const uint32_t>(component_faces.data() + component_offsets[c],
                                        component_offsets[c + 1] - component_offsets[c]);
