@@ -1426,154 +1426,180 @@ bool Mesher::triangulate(bool last_round) {
   // Polygons, and their edges.
   polygon_offsets_.assign(1, 0);
   polygon_vertices_.clear();
-  edges_.clear();
   for (uint32_t r = 0; r < regions_; ++r) {
     if (region_ok_[r]) {
       uint32_t l = region_loop_[r], off = loop_offsets_[l], m = loop_size(l);
-      size_t first = polygon_vertices_.size();
       for (uint32_t i = 0; i < m; ++i)
         if (anchor_[loop_vertex_[off + i]]) polygon_vertices_.push_back(out_id_[loop_vertex_[off + i]]);
-      size_t count = polygon_vertices_.size() - first;
-      for (size_t i = 0; i < count; ++i)
-        edges_.insert(edge_key(polygon_vertices_[first + i], polygon_vertices_[first + (i + 1) % count]));
     }
     polygon_offsets_.push_back(uint32_t(polygon_vertices_.size()));
   }
+  // The polygons' edges (the chords); each accepted region adds its diagonals.
+  auto insert_chords = [&] {
+    edges_.clear();
+    for (uint32_t r = 0; r < regions_; ++r) {
+      const uint32_t first = polygon_offsets_[r], count = polygon_offsets_[r + 1] - first;
+      for (uint32_t i = 0; i < count; ++i)
+        edges_.insert(edge_key(polygon_vertices_[first + i], polygon_vertices_[first + (i + 1) % count]));
+    }
+  };
+  insert_chords();
   out_.stats.chords = uint32_t(edges_.size());
 
   recolor();
 
-  triangles_.clear();
-  triangle_regions_.clear();
-  out_.stats.coloring_regions = out_.stats.fallback_regions = 0;
-  out_.stats.flipped_triangles = 0;
   std::vector<MeshingFix> round_fixes;
-  bool redo = false;
   std::vector<uint32_t> polygon, tris;
   std::vector<Chord> chords;
-  for (uint32_t r = 0; r < regions_; ++r) {
-    if (!region_ok_[r]) continue;
-    polygon.assign(polygon_vertices_.begin() + polygon_offsets_[r], polygon_vertices_.begin() + polygon_offsets_[r + 1]);
-    const size_t m = polygon.size();
-    if (m < 3) continue;  // cannot happen: settle_anchors gives every polygon three anchors
-    // polygon_index_ gives each vertex of this polygon its place in it while the region is looked at.
-    struct PolygonIndex {
-      std::vector<uint32_t>& index;
-      const std::vector<uint32_t>& polygon;
-      PolygonIndex(std::vector<uint32_t>& i, const std::vector<uint32_t>& p) : index(i), polygon(p) {
-        for (uint32_t k = 0; k < p.size(); ++k)
-          if (index[p[k]] == kNone) index[p[k]] = k;  // the first, should an anchor come twice
-      }
-      ~PolygonIndex() {
-        for (uint32_t id : polygon) index[id] = kNone;
-      }
-    } indexed(polygon_index_, polygon);
-    auto is_diagonal = [&](uint32_t a, uint32_t b) {
-      size_t ia = polygon_index_[a], ib = polygon_index_[b];
-      assert(ia != kNone && ib != kNone);
-      return (ia + 1) % m != ib && (ib + 1) % m != ia;
-    };
-    tris.resize(candidates_[r].size());
-    for (size_t i = 0; i < tris.size(); ++i) tris[i] = out_id_[candidates_[r][i]];
-    if (!fell_back_[r] && valid_coloring(r, polygon, tris)) {
-      ++out_.stats.coloring_regions;
-    } else {
-      fell_back_[r] = 1;
-      // Chords crossing in the proxy plane leave no unflipped triangulation: split them first.
-      std::vector<uint32_t> splits;
-      if (!last_round && flip_anchors_[r] < kMaxFlipAnchors) splits = crossing_splits(r, polygon);
-      // Else the direct triangulation of the last round, if the polygon did not change and it still
-      // holds; else a new one.
-      CachedTriangulation& cached = cache_[r];
-      uint32_t cost = 1;
-      if (splits.empty()) {
-        bool reused = same_polygon(cached.polygon, cached.positions, polygon);
-        if (reused) {
-          // Same polygon, same positions: only diagonals used elsewhere can have changed.
-          tris.resize(cached.tris.size());
-          for (size_t i = 0; i < tris.size(); ++i) tris[i] = out_id_[cached.tris[i]];
-          uint32_t recount = 0;
-          for (size_t t = 0; t < tris.size(); t += 3) {
-            const uint32_t* tri = &tris[t];
-            recount += !faces_along(anchor_position_[tri[0]], anchor_position_[tri[1]], anchor_position_[tri[2]],
-                                    proxies_.normal[r]);
-            for (int j = 0; j < 3; ++j)
-              if (is_diagonal(tri[j], tri[(j + 1) % 3]) && !diagonal_free(tri[j], tri[(j + 1) % 3]))
-                recount += uint32_t(m);
+  // A region out of fixes (its anchors back at their vertices, its deviation anchors spent) takes
+  // none whatever its triangulation, and a round that is redone drops every triangle it made. So
+  // the round first goes without the direct triangulations of such regions (when their polygon
+  // changed since the last): they only forbid their diagonals to the regions after them, which
+  // the round that is kept sees. If it ends with no fix to make, it is done again with them, and
+  // that is the round kept (or, if a region then needs a fix after all, redone as any other). On
+  // scans with holes 80% of the dynamic programming's steps were such regions' large polygons,
+  // made again in every round while their neighbours took anchors.
+  for (int attempt = 0;; ++attempt) {
+    const bool defer = attempt == 0 && !last_round;
+    if (attempt > 0) insert_chords();
+    triangles_.clear();
+    triangle_regions_.clear();
+    out_.stats.coloring_regions = out_.stats.fallback_regions = 0;
+    out_.stats.flipped_triangles = 0;
+    round_fixes.clear();
+    bool redo = false;
+    uint32_t deferred = 0;
+    for (uint32_t r = 0; r < regions_; ++r) {
+      if (!region_ok_[r]) continue;
+      polygon.assign(polygon_vertices_.begin() + polygon_offsets_[r],
+                     polygon_vertices_.begin() + polygon_offsets_[r + 1]);
+      const size_t m = polygon.size();
+      if (m < 3) continue;  // cannot happen: settle_anchors gives every polygon three anchors
+      // polygon_index_ gives each vertex of this polygon its place in it while the region is looked at.
+      struct PolygonIndex {
+        std::vector<uint32_t>& index;
+        const std::vector<uint32_t>& polygon;
+        PolygonIndex(std::vector<uint32_t>& i, const std::vector<uint32_t>& p) : index(i), polygon(p) {
+          for (uint32_t k = 0; k < p.size(); ++k)
+            if (index[p[k]] == kNone) index[p[k]] = k;  // the first, should an anchor come twice
+        }
+        ~PolygonIndex() {
+          for (uint32_t id : polygon) index[id] = kNone;
+        }
+      } indexed(polygon_index_, polygon);
+      auto is_diagonal = [&](uint32_t a, uint32_t b) {
+        size_t ia = polygon_index_[a], ib = polygon_index_[b];
+        assert(ia != kNone && ib != kNone);
+        return (ia + 1) % m != ib && (ib + 1) % m != ia;
+      };
+      tris.resize(candidates_[r].size());
+      for (size_t i = 0; i < tris.size(); ++i) tris[i] = out_id_[candidates_[r][i]];
+      if (!fell_back_[r] && valid_coloring(r, polygon, tris)) {
+        ++out_.stats.coloring_regions;
+      } else {
+        fell_back_[r] = 1;
+        // Chords crossing in the proxy plane leave no unflipped triangulation: split them first.
+        std::vector<uint32_t> splits;
+        if (!last_round && flip_anchors_[r] < kMaxFlipAnchors) splits = crossing_splits(r, polygon);
+        // Else the direct triangulation of the last round, if the polygon did not change and it still
+        // holds; else a new one.
+        CachedTriangulation& cached = cache_[r];
+        uint32_t cost = 1;
+        if (splits.empty()) {
+          bool reused = same_polygon(cached.polygon, cached.positions, polygon);
+          if (reused) {
+            // Same polygon, same positions: only diagonals used elsewhere can have changed.
+            tris.resize(cached.tris.size());
+            for (size_t i = 0; i < tris.size(); ++i) tris[i] = out_id_[cached.tris[i]];
+            uint32_t recount = 0;
+            for (size_t t = 0; t < tris.size(); t += 3) {
+              const uint32_t* tri = &tris[t];
+              recount += !faces_along(anchor_position_[tri[0]], anchor_position_[tri[1]], anchor_position_[tri[2]],
+                                      proxies_.normal[r]);
+              for (int j = 0; j < 3; ++j)
+                if (is_diagonal(tri[j], tri[(j + 1) % 3]) && !diagonal_free(tri[j], tri[(j + 1) % 3]))
+                  recount += uint32_t(m);
+            }
+            reused = recount <= cached.cost;
+            cost = recount;
+            out_.stats.reused_triangulations += reused;
           }
-          reused = recount <= cached.cost;
-          cost = recount;
-          out_.stats.reused_triangulations += reused;
+          if (!reused && defer && reverted_[r] && flip_anchors_[r] >= kMaxDeviationAnchors) {
+            ++deferred;
+            continue;
+          }
+          if (!reused) {
+            cost = triangulate_polygon(r, polygon, tris);
+            keep_polygon(polygon, cached.polygon, cached.positions);
+            cached.tris.resize(tris.size());
+            for (size_t i = 0; i < tris.size(); ++i) cached.tris[i] = anchors_[tris[i]];
+            cached.cost = cost;
+          }
         }
-        if (!reused) {
-          cost = triangulate_polygon(r, polygon, tris);
-          keep_polygon(polygon, cached.polygon, cached.positions);
-          cached.tris.resize(tris.size());
-          for (size_t i = 0; i < tris.size(); ++i) cached.tris[i] = anchors_[tris[i]];
-          cached.cost = cost;
-        }
-      }
-      if (cost > 0 && !last_round) {
-        // No acceptable triangulation: the region's anchors go back to their mesh vertices (the
-        // averaged projections can fold a thin region); else its most deviating chord is split.
-        if (splits.empty() && !reverted_[r]) {
-          reverted_[r] = 1;
-          uint32_t moved = 0;
-          for (uint32_t id : polygon)
-            if (!at_vertex_[anchors_[id]]) at_vertex_[anchors_[id]] = 1, ++moved;
-          if (moved > 0) {
-            out_.stats.vertex_anchors += moved;
-            out_.fixes.push_back({MeshingFix::anchor_position, r, kNone, kNone, moved});
+        if (cost > 0 && !last_round) {
+          // No acceptable triangulation: the region's anchors go back to their mesh vertices (the
+          // averaged projections can fold a thin region); else its most deviating chord is split.
+          if (splits.empty() && !reverted_[r]) {
+            reverted_[r] = 1;
+            uint32_t moved = 0;
+            for (uint32_t id : polygon)
+              if (!at_vertex_[anchors_[id]]) at_vertex_[anchors_[id]] = 1, ++moved;
+            if (moved > 0) {
+              out_.stats.vertex_anchors += moved;
+              out_.fixes.push_back({MeshingFix::anchor_position, r, kNone, kNone, moved});
+              redo = true;
+              continue;
+            }
+          }
+          if (splits.empty() && flip_anchors_[r] < kMaxDeviationAnchors) {
+            uint32_t v = deviation_split(r);
+            if (v != kNone) splits.push_back(v);
+          }
+          bool added = false;
+          for (uint32_t v : splits) {
+            if (anchor_[v] || flip_anchors_[r] >= kMaxFlipAnchors) continue;
+            ++flip_anchors_[r];
+            add_anchor(v, kFixAnchor);
+            out_.fixes.push_back({MeshingFix::flip_anchor, r, kNone, v, 1});
+            added = true;
+          }
+          if (added) {
             redo = true;
             continue;
           }
         }
-        if (splits.empty() && flip_anchors_[r] < kMaxDeviationAnchors) {
-          uint32_t v = deviation_split(r);
-          if (v != kNone) splits.push_back(v);
-        }
-        bool added = false;
-        for (uint32_t v : splits) {
-          if (anchor_[v] || flip_anchors_[r] >= kMaxFlipAnchors) continue;
-          ++flip_anchors_[r];
-          add_anchor(v, kFixAnchor);
-          out_.fixes.push_back({MeshingFix::flip_anchor, r, kNone, v, 1});
-          added = true;
-        }
-        if (added) {
-          redo = true;
-          continue;
-        }
-      }
-      if (!splits.empty()) cost = triangulate_polygon(r, polygon, tris);  // out of anchors: take the best
-      ++out_.stats.fallback_regions;
-      round_fixes.push_back({MeshingFix::fallback_triangulation, r, kNone, kNone, 0});
-      if (cost > 0) {  // kept as it is: count what is wrong with it
-        uint32_t bad = 0;
-        for (size_t t = 0; t < tris.size(); t += 3) {
-          bool ok = faces_along(anchor_position_[tris[t]], anchor_position_[tris[t + 1]],
-                                anchor_position_[tris[t + 2]], proxies_.normal[r]);
-          for (int j = 0; j < 3 && ok; ++j) {
-            uint32_t a = tris[t + j], b = tris[t + (j + 1) % 3];
-            if (is_diagonal(a, b) && !diagonal_free(a, b)) ok = false;
+        if (!splits.empty()) cost = triangulate_polygon(r, polygon, tris);  // out of anchors: take the best
+        ++out_.stats.fallback_regions;
+        round_fixes.push_back({MeshingFix::fallback_triangulation, r, kNone, kNone, 0});
+        if (cost > 0) {  // kept as it is: count what is wrong with it
+          uint32_t bad = 0;
+          for (size_t t = 0; t < tris.size(); t += 3) {
+            bool ok = faces_along(anchor_position_[tris[t]], anchor_position_[tris[t + 1]],
+                                  anchor_position_[tris[t + 2]], proxies_.normal[r]);
+            for (int j = 0; j < 3 && ok; ++j) {
+              uint32_t a = tris[t + j], b = tris[t + (j + 1) % 3];
+              if (is_diagonal(a, b) && !diagonal_free(a, b)) ok = false;
+            }
+            bad += !ok;
           }
-          bad += !ok;
+          out_.stats.flipped_triangles += bad;
+          round_fixes.push_back({MeshingFix::flipped_triangles, r, kNone, kNone, bad});
         }
-        out_.stats.flipped_triangles += bad;
-        round_fixes.push_back({MeshingFix::flipped_triangles, r, kNone, kNone, bad});
+      }
+      // Accepted: its diagonals may not be used by any other region.
+      for (size_t t = 0; t < tris.size(); t += 3) {
+        for (int j = 0; j < 3; ++j) {
+          uint32_t a = tris[t + j], b = tris[t + (j + 1) % 3];
+          if (is_diagonal(a, b)) edges_.insert(edge_key(a, b));
+        }
+        triangles_.insert(triangles_.end(), {tris[t], tris[t + 1], tris[t + 2]});
+        triangle_regions_.push_back(r);
       }
     }
-    // Accepted: its diagonals may not be used by any other region.
-    for (size_t t = 0; t < tris.size(); t += 3) {
-      for (int j = 0; j < 3; ++j) {
-        uint32_t a = tris[t + j], b = tris[t + (j + 1) % 3];
-        if (is_diagonal(a, b)) edges_.insert(edge_key(a, b));
-      }
-      triangles_.insert(triangles_.end(), {tris[t], tris[t + 1], tris[t + 2]});
-      triangle_regions_.push_back(r);
-    }
+    out_.stats.deferred_triangulations += deferred;
+    if (redo) return false;
+    if (deferred == 0) break;
   }
-  if (redo) return false;
   out_.fixes.insert(out_.fixes.end(), round_fixes.begin(), round_fixes.end());
   return true;
 }

@@ -156,6 +156,9 @@ struct MeshingStats {
   uint32_t fallback_regions = 0;      ///< regions triangulated directly (fallback_triangulation)
   uint32_t meshing_rounds = 0;        ///< 1 + rounds redone after anchor_position / flip_anchor fixes
   uint32_t reused_triangulations = 0; ///< direct triangulations kept from an earlier round (same polygon and positions)
+  /// direct triangulations left out of rounds that were to be redone anyway (regions out of fixes
+  /// whose diagonals no other region could want)
+  uint32_t deferred_triangulations = 0;
   /// regions whose first coloring in a pass after a split_curved one was copied from the pass
   /// before (same faces, interior and border seeds)
   uint32_t copied_colorings = 0;
