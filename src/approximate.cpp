@@ -54,7 +54,10 @@
 //     vertices (averaged projections can fold a thin region); else its most deviating chord is
 //     split, a few times. A region left with flipped triangles after that is too curved for one
 //     polygon: it is split in two by its normals and the whole meshing done again (at most
-//     kMaxSplitPasses passes); what remains is reported.
+//     kMaxSplitPasses passes); what remains is reported. A round's only use is its fixes until one
+//     has none: a region that will take a fix is only tested for an acceptable triangulation
+//     (has_perfect_triangulation), and a region out of fixes is not triangulated in a round that
+//     is redone (the round kept is done again with it).
 //
 // Why this gives a closed manifold for closed manifold input: every region is a disk with one
 // polygon, every chord edge is shared by exactly the two polygons on its sides (in opposite
@@ -100,6 +103,12 @@ constexpr uint32_t kMaxDynamicProgramming = 1024;
 constexpr double kMinFacingCosine = 1e-6;
 // Triangles whose smallest angle has a smaller sine are slivers (collinear anchors): never chosen.
 constexpr double kMinSine = 1e-6;
+constexpr PolygonTriangleRules kTriangleRules{.min_sine = kMinSine, .min_facing_cosine = kMinFacingCosine};
+// A region that takes a fix whenever its polygon has no acceptable triangulation is first tested for
+// one without making it (has_perfect_triangulation) from this many corners, giving the test up
+// after this many triangles per pair of corners: below, the triangulation itself costs little.
+constexpr size_t kMinPerfectTest = 16;
+constexpr uint64_t kPerfectTestBudget = 4;
 // Same as cluster(): repair rounds of the boundary iteration (stalls: run_iterations).
 constexpr uint32_t kMaxRepairRounds = 8;
 // Teleport attempts after a clustering (each costs a boundary iteration to convergence); the loop
@@ -574,6 +583,10 @@ class Mesher {
   bool coloring_shape(uint32_t region, const std::vector<uint32_t>& polygon, const std::vector<uint32_t>& tris,
                       std::vector<uint32_t>& diagonals) const;
   uint32_t triangulate_polygon(uint32_t region, const std::vector<uint32_t>& polygon, std::vector<uint32_t>& tris) const;
+  void polygon_tables(const std::vector<uint32_t>& polygon, std::vector<Vec3>& corners,
+                      std::vector<uint8_t>& allowed) const;
+  bool fix_without_triangulation(uint32_t region, const std::vector<uint32_t>& polygon) const;
+  bool surely_imperfect(uint32_t region, const std::vector<uint32_t>& polygon) const;
   bool diagonal_free(uint32_t a, uint32_t b) const { return !edges_.contains(edge_key(a, b)); }
   void finish();
 
@@ -1354,22 +1367,56 @@ uint32_t Mesher::triangulate_polygon(uint32_t region, const std::vector<uint32_t
     }
     return cost;
   }
+  std::vector<Vec3> corners;
+  std::vector<uint8_t> allowed;
+  polygon_tables(polygon, corners, allowed);
   const V3 n = proxies_.normal[region];
-  std::vector<Vec3> corners(m);
+  const uint32_t cost = meshcvt::triangulate_polygon(corners, {n.x, n.y, n.z}, allowed, kTriangleRules, &pool_, tris);
+  for (uint32_t& t : tris) t = polygon[t];
+  return cost;
+}
+
+// The corners of `polygon` (output ids) and its m x m flags of diagonals other regions left free,
+// as polygon_triangulation.h takes them.
+void Mesher::polygon_tables(const std::vector<uint32_t>& polygon, std::vector<Vec3>& corners,
+                            std::vector<uint8_t>& allowed) const {
+  const uint32_t m = uint32_t(polygon.size());
+  corners.resize(m);
   for (uint32_t i = 0; i < m; ++i) {
     const V3 a = anchor_position_[polygon[i]];
     corners[i] = {a.x, a.y, a.z};
   }
-  std::vector<uint8_t> allowed(size_t(m) * m, 1);
+  allowed.assign(size_t(m) * m, 1);
   for (uint32_t i = 0; i < m; ++i)
     for (uint32_t j = i + 2; j < m; ++j)
       if (!(i == 0 && j == m - 1))
         allowed[size_t(i) * m + j] = allowed[size_t(j) * m + i] = diagonal_free(polygon[i], polygon[j]);
-  const uint32_t cost = meshcvt::triangulate_polygon(corners, {n.x, n.y, n.z}, allowed,
-                                                     {.min_sine = kMinSine, .min_facing_cosine = kMinFacingCosine},
-                                                     &pool_, tris);
-  for (uint32_t& t : tris) t = polygon[t];
-  return cost;
+}
+
+// Whether `region`'s polygon, found to have no acceptable triangulation, then takes a fix that
+// does not need its triangulation (its anchors to their vertices, or an anchor on its most
+// deviating chord), as triangulate() decides it for a round that is not the last.
+bool Mesher::fix_without_triangulation(uint32_t region, const std::vector<uint32_t>& polygon) const {
+  if (!reverted_[region])
+    for (uint32_t id : polygon)
+      if (!at_vertex_[anchors_[id]]) return true;
+  if (flip_anchors_[region] >= kMaxDeviationAnchors || flip_anchors_[region] >= kMaxFlipAnchors) return false;
+  const uint32_t v = deviation_split(region);
+  return v != kNone && !anchor_[v];
+}
+
+// Whether the polygon surely has no acceptable triangulation (triangulate_polygon's cost > 0),
+// found without making one; false also when the test gave up.
+bool Mesher::surely_imperfect(uint32_t region, const std::vector<uint32_t>& polygon) const {
+  const size_t m = polygon.size();
+  if (m < kMinPerfectTest || m > kMaxDynamicProgramming) return false;
+  std::vector<Vec3> corners;
+  std::vector<uint8_t> allowed;
+  polygon_tables(polygon, corners, allowed);
+  const V3 n = proxies_.normal[region];
+  const std::optional<bool> perfect =
+      has_perfect_triangulation(corners, {n.x, n.y, n.z}, allowed, kTriangleRules, kPerfectTestBudget * m * m);
+  return perfect.has_value() && !*perfect;
 }
 
 bool Mesher::same_polygon(const std::vector<uint32_t>& ids, const std::vector<V3>& positions,
@@ -1528,7 +1575,14 @@ bool Mesher::triangulate(bool last_round) {
             ++deferred;
             continue;
           }
-          if (!reused) {
+          if (reused) {
+          } else if (!last_round && fix_without_triangulation(r, polygon) && surely_imperfect(r, polygon)) {
+            // It takes a fix below, and the round is redone: no triangulation is needed (in the first
+            // rounds of a scan with holes, most of the dynamic programming's steps went to such
+            // polygons). The polygon changes with the fix, so nothing is cached.
+            cost = 1;
+            ++out_.stats.tested_polygons;
+          } else {
             cost = triangulate_polygon(r, polygon, tris);
             keep_polygon(polygon, cached.polygon, cached.positions);
             cached.tris.resize(tris.size());

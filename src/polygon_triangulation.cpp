@@ -23,6 +23,7 @@
 #include "polygon_triangulation.h"
 
 #include <algorithm>
+#include <bit>
 #include <cassert>
 #include <cmath>
 #include <limits>
@@ -37,6 +38,20 @@ namespace {
 constexpr uint32_t kTile = 16;
 constexpr uint32_t kMinParallelCorners = 128;
 constexpr uint32_t kNoCorner = std::numeric_limits<uint32_t>::max();
+
+// The sine of the smallest angle of the triangle (i, k, j) when it is not bad (not a sliver, and
+// facing along n unless n is zero), else -1. cr = (p[k] - p[i]) x (p[j] - p[i]); l.. are the
+// lengths of its sides. The sine is twice the area over the product of the two shorter sides (the
+// largest of the three products). One function for the dynamic programming and the test of a
+// perfect triangulation, so that both call the same triangles bad.
+double good_triangle_sine(Vec3 cr, Vec3 n, bool any_direction, const PolygonTriangleRules& rules, double lik,
+                          double lkj, double lij) {
+  const double area2 = length(cr);
+  const double big = std::max({lkj * lij, lij * lik, lik * lkj});
+  const double sine = big > 0 ? area2 / big : 0.0;
+  if (sine > rules.min_sine && (any_direction || dot(cr, n) > rules.min_facing_cosine * area2)) return sine;
+  return -1.0;
+}
 
 }  // namespace
 
@@ -70,14 +85,9 @@ uint32_t triangulate_polygon(std::span<const Vec3> p, Vec3 n, const std::vector<
       double q = std::min(quality[ik], quality[kj]);
       if (c > best_cost || (c == best_cost && !(q > best_quality))) continue;  // cannot do better
       if (!allowed[ik] || !allowed[kj]) c += m;
-      // The triangle (i, k, j): the sine of its smallest angle is twice its area over the product
-      // of its two shorter sides (the largest of the three products).
-      const Vec3 cr = cross(p[k] - p[i], p[j] - p[i]);
-      const double area2 = length(cr);
-      const double lik = len[ik], lkj = len[kj], lij = len[ij];
-      const double big = std::max({lkj * lij, lij * lik, lik * lkj});
-      const double sine = big > 0 ? area2 / big : 0.0;
-      if (sine > rules.min_sine && (any_direction || dot(cr, n) > rules.min_facing_cosine * area2))
+      const double sine =
+          good_triangle_sine(cross(p[k] - p[i], p[j] - p[i]), n, any_direction, rules, len[ik], len[kj], len[ij]);
+      if (sine >= 0)
         q = std::min(q, sine);
       else
         ++c;
@@ -117,6 +127,49 @@ uint32_t triangulate_polygon(std::span<const Vec3> p, Vec3 n, const std::vector<
     stack.push_back({k, j});
   }
   return cost[m - 1];
+}
+
+std::optional<bool> has_perfect_triangulation(std::span<const Vec3> p, Vec3 n, const std::vector<uint8_t>& allowed,
+                                              const PolygonTriangleRules& rules, uint64_t max_tests) {
+  const uint32_t m = uint32_t(p.size());
+  assert(m >= 3 && allowed.size() == size_t(m) * m);
+  const bool any_direction = dot(n, n) == 0;
+  // usable(i, k): the sub-polygon i..k (i < k) has a perfect triangulation and its side (i, k) may
+  // be used, as bits: by_first[i] holds bit k, by_last[k] holds bit i.
+  const size_t words = (m + 63) / 64;
+  std::vector<uint64_t> by_first(size_t(m) * words, 0), by_last(size_t(m) * words, 0);
+  auto set_usable = [&](uint32_t i, uint32_t k) {
+    by_first[size_t(i) * words + k / 64] |= uint64_t(1) << (k % 64);
+    by_last[size_t(k) * words + i / 64] |= uint64_t(1) << (i % 64);
+  };
+  for (uint32_t i = 0; i + 1 < m; ++i)
+    if (allowed[size_t(i) * m + i + 1]) set_usable(i, i + 1);
+  uint64_t tests = 0;
+  // Pair (i, j) reads pairs (i, k) and (k, j) with i < k < j: j ascending, i descending.
+  for (uint32_t j = 2; j < m; ++j)
+    for (uint32_t i = j - 1; i-- > 0;) {
+      const uint64_t* first = &by_first[size_t(i) * words];
+      const uint64_t* last = &by_last[size_t(j) * words];
+      bool perfect = false;
+      for (uint32_t w = (i + 1) / 64; w <= (j - 1) / 64 && !perfect; ++w) {
+        uint64_t middle = first[w] & last[w];  // only bits i < k < j can be set in both
+        while (middle != 0) {
+          const uint32_t k = w * 64 + uint32_t(std::countr_zero(middle));
+          middle &= middle - 1;
+          if (++tests > max_tests) return std::nullopt;
+          const double sine = good_triangle_sine(cross(p[k] - p[i], p[j] - p[i]), n, any_direction, rules,
+                                                 length(p[k] - p[i]), length(p[j] - p[k]), length(p[j] - p[i]));
+          if (sine >= 0) {
+            perfect = true;
+            break;
+          }
+        }
+      }
+      if (!perfect) continue;
+      if (i == 0 && j == m - 1) return true;
+      if (allowed[size_t(i) * m + j]) set_usable(i, j);
+    }
+  return false;
 }
 
 }  // namespace meshcvt

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -37,5 +38,16 @@ struct PolygonTriangleRules {
 /// Returns the cost (0: no bad triangle, no forbidden diagonal).
 uint32_t triangulate_polygon(std::span<const Vec3> corners, Vec3 normal, const std::vector<uint8_t>& allowed,
                              const PolygonTriangleRules& rules, WorkerPool* pool, std::vector<uint32_t>& triangles);
+
+/// Whether triangulate_polygon(corners, normal, allowed, rules, ...) would return 0: whether the
+/// polygon has a triangulation with no bad triangle and no forbidden diagonal (the same tests, to
+/// the bit), decided without the qualities. A boolean interval dynamic programming over bit sets:
+/// O(m^3 / 64) word operations plus the triangles tested, of which it stops at the first good one
+/// per pair; O(m^2 / 32) words of memory. Cheaper than the triangulation when the answer is all
+/// that is needed (a region that takes a fix when it has none). Returns nullopt when it would test
+/// more than max_tests triangles (a polygon whose pairs have many candidates and few good ones).
+std::optional<bool> has_perfect_triangulation(std::span<const Vec3> corners, Vec3 normal,
+                                              const std::vector<uint8_t>& allowed, const PolygonTriangleRules& rules,
+                                              uint64_t max_tests);
 
 }  // namespace meshcvt

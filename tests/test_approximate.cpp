@@ -460,10 +460,11 @@ TEST_CASE("mesh_partition: a direct triangulation is kept while other regions ta
 TEST_CASE("mesh_partition: rounds to be redone leave out regions out of fixes; the round kept has them all") {
   // The elephant with about one face in 50 dropped (a scan with holes): the holes cut the proxies'
   // regions into many with long borders, and regions that have spent their fixes are left out of
-  // the direct triangulations of rounds that are redone anyway (approximate.cpp, triangulate). The
-  // round kept must still triangulate every polygon: n - 2 triangles each, made of its own
-  // anchors, every edge shared by at most two triangles in opposite directions, and the flipped
-  // triangles counted in the round kept.
+  // the direct triangulations of rounds that are redone anyway, while regions that take a fix are
+  // only tested for an acceptable triangulation (approximate.cpp, triangulate). The round kept
+  // must still triangulate every polygon: n - 2 triangles each, made of its own anchors, every
+  // edge shared by at most two triangles in opposite directions, and the flipped triangles counted
+  // in the round kept.
   const Mesh full = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
   Mesh m = full;
   m.indices.clear();
@@ -472,11 +473,12 @@ TEST_CASE("mesh_partition: rounds to be redone leave out regions out of fixes; t
       m.indices.insert(m.indices.end(), &full.indices[3 * f], &full.indices[3 * f + 3]);
   REQUIRE(m.face_count() < full.face_count());
   const Topology t = build_topology(m);
-  uint64_t deferred = 0;
+  uint64_t deferred = 0, tested = 0;
   for (uint32_t n : {10u, 12u}) {
     CAPTURE(n);
     const ShapeApproximation s = approximate_shape(m, t, with_proxies(n));
     deferred += s.stats.deferred_triangulations;
+    tested += s.stats.tested_polygons;
     size_t triangles = 0;
     for (uint32_t r = 0; r < s.regions; ++r) {
       const uint32_t b = s.polygon_offsets[r], e = s.polygon_offsets[r + 1];
@@ -497,6 +499,7 @@ TEST_CASE("mesh_partition: rounds to be redone leave out regions out of fixes; t
     CHECK(flipped_triangles(s) == s.stats.flipped_triangles);
   }
   CHECK(deferred > 0);
+  CHECK(tested > 0);  // and polygons found to need a fix without their triangulation
 }
 
 TEST_CASE("mesh_partition: a closed component with fewer than 4 regions is made solid (two hemispheres)") {

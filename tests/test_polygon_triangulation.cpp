@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -158,4 +159,54 @@ TEST_CASE("triangulate_polygon: the same triangles as the plain dynamic programm
   }
   CHECK(polygons == 30);
   CHECK(with_cost > 0);  // the forbidden diagonals and reflex corners do cost somewhere
+}
+
+TEST_CASE("has_perfect_triangulation: whether the dynamic programming's cost is 0, on random polygons") {
+  // Star-like polygons from nearly convex to ragged (some crossing themselves), with and without a
+  // normal and forbidden diagonals: the answer must be the triangulation's cost == 0 on each, and
+  // both answers occur.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0, 1);
+  const PolygonTriangleRules rules;
+  size_t perfect = 0, imperfect = 0;
+  for (size_t m : {3u, 4u, 5u, 8u, 31u, 64u, 65u, 130u}) {
+    for (double spread : {0.02, 0.1, 0.35}) {
+      for (int variant = 0; variant < 4; ++variant) {
+        CAPTURE(m);
+        CAPTURE(spread);
+        CAPTURE(variant);
+        std::vector<Vec3> p = regular_polygon(m);
+        for (Vec3& c : p) {
+          const double r = 1 + spread * (2 * unit(rng) - 1);
+          c = {r * c.x, r * c.y, 0.2 * spread * (2 * unit(rng) - 1)};
+        }
+        // The most ragged ones also cross themselves: a corner swapped with one a few places on.
+        if (spread > 0.3 && m > 8) std::swap(p[m / 3], p[m / 3 + 1 + size_t(unit(rng) * 4)]);
+        std::vector<uint8_t> allowed = all_allowed(m);
+        for (size_t i = 0; i < m; ++i)
+          for (size_t j = i + 2; j < m; ++j)
+            if (unit(rng) < 0.5 * (variant / 2)) allowed[i * m + j] = allowed[j * m + i] = 0;
+        const Vec3 n = variant % 2 == 1 ? Vec3{0, 0, 0} : Vec3{0, 0, 1};
+        std::vector<uint32_t> t;
+        const bool expected = triangulate_polygon(p, n, allowed, rules, nullptr, t) == 0;
+        const std::optional<bool> answer = has_perfect_triangulation(p, n, allowed, rules, uint64_t(1) << 40);
+        REQUIRE(answer.has_value());
+        CHECK(*answer == expected);
+        (expected ? perfect : imperfect) += 1;
+      }
+    }
+  }
+  CHECK(perfect > 10);
+  CHECK(imperfect > 10);
+  // The arrow of the first test: perfect facing +z, not facing -z; three collinear corners never.
+  const std::vector<Vec3> arrow{{0, 0, 0}, {2, 1, 0}, {0, 0.5, 0}, {-2, 1, 0}};
+  CHECK(has_perfect_triangulation(arrow, {0, 0, 1}, all_allowed(4), rules, 100) == std::optional<bool>(true));
+  CHECK(has_perfect_triangulation(arrow, {0, 0, -1}, all_allowed(4), rules, 100) == std::optional<bool>(false));
+  const std::vector<Vec3> flat{{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+  CHECK(has_perfect_triangulation(flat, {0, 0, 0}, all_allowed(3), rules, 100) == std::optional<bool>(false));
+  // A square with both diagonals forbidden has none; with no test allowed, no answer.
+  std::vector<uint8_t> allowed = all_allowed(4);
+  allowed[0 * 4 + 2] = allowed[2 * 4 + 0] = allowed[1 * 4 + 3] = allowed[3 * 4 + 1] = 0;
+  CHECK(has_perfect_triangulation(regular_polygon(4), {0, 0, 1}, allowed, rules, 100) == std::optional<bool>(false));
+  CHECK(!has_perfect_triangulation(regular_polygon(17), {0, 0, 1}, all_allowed(17), rules, 0).has_value());
 }

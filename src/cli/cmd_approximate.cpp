@@ -92,6 +92,7 @@ void write_report(const ApproximateArgs& a, const Mesh& mesh, const ReadStats& r
       .value("fallback_regions", s.stats.fallback_regions).value("meshing_rounds", s.stats.meshing_rounds)
       .value("reused_triangulations", s.stats.reused_triangulations)
       .value("deferred_triangulations", s.stats.deferred_triangulations)
+      .value("tested_polygons", s.stats.tested_polygons)
       .value("copied_colorings", s.stats.copied_colorings).end_object();
   j.begin_array("fixes");
   for (const MeshingFix& f : s.fixes) {

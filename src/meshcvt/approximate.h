@@ -159,6 +159,9 @@ struct MeshingStats {
   /// direct triangulations left out of rounds that were to be redone anyway (regions out of fixes
   /// whose diagonals no other region could want)
   uint32_t deferred_triangulations = 0;
+  /// polygons found to have no acceptable triangulation without making one (their region then took
+  /// a fix)
+  uint32_t tested_polygons = 0;
   /// regions whose first coloring in a pass after a split_curved one was copied from the pass
   /// before (same faces, interior and border seeds)
   uint32_t copied_colorings = 0;
