@@ -1481,17 +1481,6 @@ bool Mesher::triangulate(bool last_round) {
     }
     polygon_offsets_.push_back(uint32_t(polygon_vertices_.size()));
   }
-  // The polygons' edges (the chords); each accepted region adds its diagonals.
-  auto insert_chords = [&] {
-    edges_.clear();
-    for (uint32_t r = 0; r < regions_; ++r) {
-      const uint32_t first = polygon_offsets_[r], count = polygon_offsets_[r + 1] - first;
-      for (uint32_t i = 0; i < count; ++i)
-        edges_.insert(edge_key(polygon_vertices_[first + i], polygon_vertices_[first + (i + 1) % count]));
-    }
-  };
-  insert_chords();
-  out_.stats.chords = uint32_t(edges_.size());
 
   recolor();
 
@@ -1508,7 +1497,14 @@ bool Mesher::triangulate(bool last_round) {
   // made again in every round while their neighbours took anchors.
   for (int attempt = 0;; ++attempt) {
     const bool defer = attempt == 0 && !last_round;
-    if (attempt > 0) insert_chords();
+    // Each try starts from the polygons' edges (the chords); each region it accepts adds its diagonals.
+    edges_.clear();
+    for (uint32_t r = 0; r < regions_; ++r) {
+      const uint32_t first = polygon_offsets_[r], count = polygon_offsets_[r + 1] - first;
+      for (uint32_t i = 0; i < count; ++i)
+        edges_.insert(edge_key(polygon_vertices_[first + i], polygon_vertices_[first + (i + 1) % count]));
+    }
+    out_.stats.chords = uint32_t(edges_.size());
     triangles_.clear();
     triangle_regions_.clear();
     out_.stats.coloring_regions = out_.stats.fallback_regions = 0;
