@@ -396,44 +396,64 @@ class Builder {
 // 30 (the code's bits) + 32 (middles).
 class MortonBuilder {
  public:
-  MortonBuilder(std::vector<PrimRef>& prims, std::vector<uint32_t>& faces) : prims_(prims), faces_(faces) {}
+  // The mesh's faces (3 indices each into xyz positions), as the constructor takes them.
+  MortonBuilder(const float* positions, const uint32_t* indices, uint32_t faces)
+      : positions_(positions), indices_(indices), n_(faces) {}
 
-  NodeList build(const Range& all) {
-    const uint32_t n = uint32_t(prims_.size());
+  // Fills `faces` (input face per leaf slot) and `triangles` (9 floats per slot, leaf order) and
+  // returns the nodes. No per-face box is kept: the codes need only the centroids, and a leaf's
+  // box is that of its triangles' corners, which are read in leaf order anyway (at 4.8M faces the
+  // boxes were 150 MB written, copied in sorted order and read once).
+  NodeList build(std::vector<uint32_t>& faces, std::vector<float>& triangles) {
+    const uint32_t n = n_;
+    // Twice each face's box center (centroid2 of its PrimRef, to the bit), and their box.
+    std::vector<float> center2(3 * size_t(n));
+    Box cbox;
+    for (uint32_t f = 0; f < n; ++f) {
+      Box box;
+      for (int c = 0; c < 3; ++c) {
+        const float* v = &positions_[3 * size_t(indices_[3 * size_t(f) + c])];
+        const float point[4] = {v[0], v[1], v[2], 0.0f};
+        box.grow_point(point);
+      }
+      float c2[4];
+      centroid2(box, c2);
+      cbox.grow_point(c2);
+      for (int k = 0; k < 3; ++k) center2[3 * size_t(f) + k] = c2[k];
+    }
     float lo[3], scale[3];
     for (int k = 0; k < 3; ++k) {
-      lo[k] = all.cbox.min[k];
-      const float extent = all.cbox.max[k] - lo[k];
+      lo[k] = cbox.min[k];
+      const float extent = cbox.max[k] - lo[k];
       scale[k] = extent > 0 ? 1023.0f / extent : 0.0f;
       if (!std::isfinite(scale[k])) scale[k] = 0.0f;
     }
     std::vector<uint32_t> code(n);
     for (uint32_t i = 0; i < n; ++i) {
-      float c[4];
-      centroid2(prims_[i], c);
       uint32_t key = 0;
       for (int k = 0; k < 3; ++k) {
-        const float t = std::clamp((c[k] - lo[k]) * scale[k], 0.0f, 1023.0f);
+        const float t = std::clamp((center2[3 * size_t(i) + k] - lo[k]) * scale[k], 0.0f, 1023.0f);
         key |= spread_bits(uint32_t(t)) << k;
       }
       code[i] = key;
     }
+    center2 = std::vector<float>();
     // Stable: equal codes keep the faces' order, so the tree is a function of the mesh alone.
-    const std::vector<uint32_t> order = sort_by_key(code);
-    {
-      std::vector<PrimRef> sorted_prims(n);
-      std::vector<uint32_t> sorted_faces(n);
-      codes_.resize(n);
-      for (uint32_t i = 0; i < n; ++i) {
-        sorted_prims[i] = prims_[order[i]];
-        sorted_faces[i] = faces_[order[i]];
-        codes_[i] = code[order[i]];
-      }
-      prims_.swap(sorted_prims);
-      faces_.swap(sorted_faces);
+    faces = sort_by_key(code);
+    codes_.resize(n);
+    for (uint32_t i = 0; i < n; ++i) codes_[i] = code[faces[i]];
+    code = std::vector<uint32_t>();
+    triangles.resize(9 * size_t(n));
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t f = faces[i];
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 3; ++k)
+          triangles[9 * size_t(i) + 3 * c + k] = positions_[3 * size_t(indices_[3 * size_t(f) + c]) + k];
     }
+    triangles_ = triangles.data();
     nodes_.assign(1, TriangleBvh::Node{});
     subtree(0, 0, n);
+    codes_ = std::vector<uint32_t>();  // freed before the caller turns the nodes into pairs
     return std::move(nodes_);
   }
 
@@ -444,7 +464,12 @@ class MortonBuilder {
   Box subtree(uint32_t at, uint32_t begin, uint32_t end) {
     Box box;
     if (end - begin <= kLeaf) {
-      for (uint32_t i = begin; i < end; ++i) box.grow(prims_[i]);
+      for (uint32_t i = begin; i < end; ++i)
+        for (int c = 0; c < 3; ++c) {
+          const float* v = &triangles_[9 * size_t(i) + 3 * c];
+          const float point[4] = {v[0], v[1], v[2], 0.0f};
+          box.grow_point(point);
+        }
       TriangleBvh::Node& leaf = nodes_[at];
       for (int k = 0; k < 3; ++k) leaf.min[k] = box.min[k], leaf.max[k] = box.max[k];
       leaf.index = begin;
@@ -471,9 +496,11 @@ class MortonBuilder {
     return box;
   }
 
-  std::vector<PrimRef>& prims_;
-  std::vector<uint32_t>& faces_;
-  std::vector<uint32_t> codes_;  // Morton code of prims_[i], after the sort
+  const float* positions_;
+  const uint32_t* indices_;
+  const uint32_t n_;
+  const float* triangles_ = nullptr;
+  std::vector<uint32_t> codes_;  // Morton code of leaf slot i, after the sort
   NodeList nodes_;
 };
 
@@ -546,6 +573,10 @@ TriangleBvh::TriangleBvh(const float* positions, const uint32_t* indices, size_t
   if (face_count == 0) return;
   assert(face_count < size_t(kNone));
   const uint32_t F = uint32_t(face_count);
+  if (build == Build::morton) {
+    set_nodes(MortonBuilder(positions, indices, F).build(faces_, triangles_));
+    return;
+  }
 
   std::vector<PrimRef> prims(F);
   std::vector<uint32_t> prim_faces(F);
@@ -570,18 +601,7 @@ TriangleBvh::TriangleBvh(const float* positions, const uint32_t* indices, size_t
   int parallel_depth = 0;
   while (threads > 1 && (1u << parallel_depth) < threads && parallel_depth < 4) ++parallel_depth;
   if (parallel_depth > 0) ++parallel_depth;
-  NodeList nodes = build == Build::morton ? MortonBuilder(prims, prim_faces).build(all)
-                                           : Builder(prims, prim_faces).build(all, parallel_depth);
-
-  // Node i of the list becomes node i + 1 (the root stays 0, node 1 is unused), so sibling pairs
-  // start at even indices and fill one NodePair each.
-  pairs_.resize((nodes.size() + 1) / 2);
-  for (size_t i = 0; i < nodes.size(); ++i) {
-    Node n = nodes[i];
-    if (n.count == 0) n.index += 1;
-    size_t at = i == 0 ? 0 : i + 1;
-    pairs_[at / 2].node[at % 2] = n;
-  }
+  set_nodes(Builder(prims, prim_faces).build(all, parallel_depth));
 
   // Triangles in leaf order: a leaf reads one contiguous run.
   prims = std::vector<PrimRef>();  // free before allocating the triangles
@@ -592,6 +612,18 @@ TriangleBvh::TriangleBvh(const float* positions, const uint32_t* indices, size_t
     for (int c = 0; c < 3; ++c)
       for (int k = 0; k < 3; ++k)
         triangles_[9 * size_t(i) + 3 * c + k] = positions[3 * size_t(indices[3 * size_t(f) + c]) + k];
+  }
+}
+
+void TriangleBvh::set_nodes(const std::vector<Node>& nodes) {
+  // Node i of the list becomes node i + 1 (the root stays 0, node 1 is unused), so sibling pairs
+  // start at even indices and fill one NodePair each.
+  pairs_.resize((nodes.size() + 1) / 2);
+  for (size_t i = 0; i < nodes.size(); ++i) {
+    Node n = nodes[i];
+    if (n.count == 0) n.index += 1;
+    size_t at = i == 0 ? 0 : i + 1;
+    pairs_[at / 2].node[at % 2] = n;
   }
 }
 

@@ -47,8 +47,9 @@ class TriangleBvh {
     sah,
     /// The faces sorted along a Morton curve of their centroids, split where the curve's leading
     /// bit changes (a linear BVH, Lauterbach et al. 2009): about 0.14 s per million faces on one
-    /// thread (the 4.8M-face bunny: 0.65-0.68 s, the SAH build 2.15 s, 1.42 s on two threads), queries
-    /// somewhat slower. For trees queried a few times per face (approximation_error).
+    /// thread (the 4.8M-face bunny: 0.67-0.69 s on 2026-11-28's VM, where the SAH build took 2.15 s
+    /// and 1.42 s on two threads some days before), queries somewhat slower. Always on one thread.
+    /// For trees queried a few times per face (approximation_error).
     morton,
   };
 
@@ -100,6 +101,7 @@ class TriangleBvh {
   };
   const Node& node(uint32_t i) const { return pairs_[i >> 1].node[i & 1]; }
   void prefetch_target(const Node& n) const;
+  void set_nodes(const std::vector<Node>& nodes);  // the builders' node lists, as pairs
   std::vector<NodePair> pairs_;
   std::vector<float> triangles_;  // 9 floats per triangle, in leaf order
   std::vector<uint32_t> faces_;   // input face id per triangle, in leaf order
