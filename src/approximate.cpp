@@ -80,6 +80,7 @@
 #include "meshcvt/error.h"
 #include "parallel.h"
 #include "polygon_triangulation.h"
+#include "vec3.h"
 
 namespace meshcvt {
 
@@ -126,31 +127,16 @@ constexpr uint64_t kMinParallelColoring = 4096;
 
 // ---- small vector helpers (double)
 
-struct V3 {
-  double x = 0, y = 0, z = 0;
-};
-V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-V3 operator*(double s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
-double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-V3 cross(V3 a, V3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-double length(V3 a) { return std::sqrt(dot(a, a)); }
-
-V3 vertex_position(const Mesh& mesh, uint32_t v) {
-  const float* p = &mesh.positions[3 * size_t(v)];
-  return {p[0], p[1], p[2]};
-}
-
 // Distance from p to the segment ab (to a when a = b).
-double segment_distance(V3 p, V3 a, V3 b) {
-  V3 ab = b - a, ap = p - a;
+double segment_distance(Vec3 p, Vec3 a, Vec3 b) {
+  Vec3 ab = b - a, ap = p - a;
   double len2 = dot(ab, ab);
   double t = len2 > 0 ? std::clamp(dot(ap, ab) / len2, 0.0, 1.0) : 0.0;
   return length(ap - t * ab);
 }
 
 // Sine of the smallest angle of triangle abc (0 when degenerate); the max-min-angle quality.
-double min_angle_sine(V3 a, V3 b, V3 c) {
+double min_angle_sine(Vec3 a, Vec3 b, Vec3 c) {
   double area2 = length(cross(b - a, c - a));
   double la = length(b - c), lb = length(c - a), lc = length(a - b);
   // sin(angle at a) = area2 / (lb lc), etc.; the smallest is at the corner opposite the shortest edge
@@ -160,8 +146,8 @@ double min_angle_sine(V3 a, V3 b, V3 c) {
 
 // Triangle abc faces along n (or n is zero: a region without area has no direction to face) and is
 // not a sliver: its smallest angle's sine is above kMinSine, so it stays a proper triangle in float.
-bool faces_along(V3 a, V3 b, V3 c, V3 n) {
-  V3 cr = cross(b - a, c - a);
+bool faces_along(Vec3 a, Vec3 b, Vec3 c, Vec3 n) {
+  Vec3 cr = cross(b - a, c - a);
   double len = length(cr);
   if (!(min_angle_sine(a, b, c) > kMinSine)) return false;
   if (dot(n, n) == 0) return true;
@@ -169,7 +155,7 @@ bool faces_along(V3 a, V3 b, V3 c, V3 n) {
 }
 
 // What the output will hold: positions rounded to float, so every test is made on those.
-V3 rounded(V3 p) { return {double(float(p.x)), double(float(p.y)), double(float(p.z))}; }
+Vec3 rounded(Vec3 p) { return {double(float(p.x)), double(float(p.y)), double(float(p.z))}; }
 
 uint64_t edge_key(uint32_t a, uint32_t b) {
   if (a > b) std::swap(a, b);
@@ -221,9 +207,9 @@ class EdgeSet {
 // ---- per-face geometry and proxies
 
 struct FaceGeometry {
-  std::vector<V3> normal;    // unit normal, (0,0,0) for a face without area
+  std::vector<Vec3> normal;    // unit normal, (0,0,0) for a face without area
   std::vector<double> area;  // input units squared
-  std::vector<V3> centroid;
+  std::vector<Vec3> centroid;
   std::vector<uint8_t> collapsed;  // a repeated corner: no edges (see Topology), ignored by meshing
 };
 
@@ -236,11 +222,11 @@ FaceGeometry face_geometry(const Mesh& mesh) {
   g.collapsed.resize(nf);
   for (size_t f = 0; f < nf; ++f) {
     uint32_t i0 = mesh.indices[3 * f], i1 = mesh.indices[3 * f + 1], i2 = mesh.indices[3 * f + 2];
-    V3 a = vertex_position(mesh, i0), b = vertex_position(mesh, i1), c = vertex_position(mesh, i2);
-    V3 n = cross(b - a, c - a);
+    Vec3 a = mesh_vertex(mesh, i0), b = mesh_vertex(mesh, i1), c = mesh_vertex(mesh, i2);
+    Vec3 n = cross(b - a, c - a);
     double len = length(n);
     g.area[f] = 0.5 * len;
-    g.normal[f] = len > 0 ? (1.0 / len) * n : V3{};
+    g.normal[f] = len > 0 ? (1.0 / len) * n : Vec3{};
     g.centroid[f] = (1.0 / 3.0) * (a + b + c);
     g.collapsed[f] = i0 == i1 || i1 == i2 || i2 == i0;
   }
@@ -248,17 +234,17 @@ FaceGeometry face_geometry(const Mesh& mesh) {
 }
 
 struct Proxies {
-  std::vector<V3> normal;    // unit N_i, (0,0,0) for a region without area
-  std::vector<V3> centroid;  // X_i
+  std::vector<Vec3> normal;    // unit N_i, (0,0,0) for a region without area
+  std::vector<Vec3> centroid;  // X_i
   std::vector<double> area;
 };
 
 Proxies compute_proxies(const FaceGeometry& g, const std::vector<uint32_t>& labels, uint32_t regions) {
   Proxies p;
-  p.normal.assign(regions, V3{});
-  p.centroid.assign(regions, V3{});
+  p.normal.assign(regions, Vec3{});
+  p.centroid.assign(regions, Vec3{});
   p.area.assign(regions, 0.0);
-  std::vector<V3> plain(regions);  // unweighted centroid sums, for regions without area
+  std::vector<Vec3> plain(regions);  // unweighted centroid sums, for regions without area
   std::vector<uint32_t> count(regions, 0);
   for (size_t f = 0; f < labels.size(); ++f) {
     uint32_t r = labels[f];
@@ -271,7 +257,7 @@ Proxies compute_proxies(const FaceGeometry& g, const std::vector<uint32_t>& labe
   }
   for (uint32_t r = 0; r < regions; ++r) {
     double len = length(p.normal[r]);
-    p.normal[r] = len > 0 ? (1.0 / len) * p.normal[r] : V3{};
+    p.normal[r] = len > 0 ? (1.0 / len) * p.normal[r] : Vec3{};
     if (p.area[r] > 0)
       p.centroid[r] = (1.0 / p.area[r]) * p.centroid[r];
     else if (count[r] > 0)
@@ -283,7 +269,7 @@ Proxies compute_proxies(const FaceGeometry& g, const std::vector<uint32_t>& labe
 double partition_distortion(const FaceGeometry& g, const std::vector<uint32_t>& labels, const Proxies& p) {
   double e = 0;
   for (size_t f = 0; f < labels.size(); ++f) {
-    V3 d = g.normal[f] - p.normal[labels[f]];
+    Vec3 d = g.normal[f] - p.normal[labels[f]];
     e += g.area[f] * dot(d, d);
   }
   return e;
@@ -542,7 +528,7 @@ class Mesher {
     uint32_t o = topology_.face_adjacent[half_edge];
     return o == kNone ? kNone : labels_[o];
   }
-  V3 position(uint32_t v) const { return vertex_position(mesh_, v); }
+  Vec3 position(uint32_t v) const { return mesh_vertex(mesh_, v); }
 
   void find_open_vertices();
   void extract_loops();
@@ -641,7 +627,7 @@ class Mesher {
   // from one round to the next although the polygon is the same.
   struct CachedTriangulation {
     std::vector<uint32_t> polygon, tris;  // input vertex ids
-    std::vector<V3> positions;
+    std::vector<Vec3> positions;
     uint32_t cost = 0;
   };
   // Per region: the last crossing_splits() and the polygon it was made from. The result depends
@@ -649,13 +635,13 @@ class Mesher {
   // crossings in every round while another region takes anchors.
   struct CachedCrossings {
     std::vector<uint32_t> polygon, splits;  // input vertex ids
-    std::vector<V3> positions;
+    std::vector<Vec3> positions;
   };
   std::vector<CachedCrossings> crossings_cache_;
   // The polygon (output ids) and its positions are `ids` (input ids) and `positions`.
-  bool same_polygon(const std::vector<uint32_t>& ids, const std::vector<V3>& positions,
+  bool same_polygon(const std::vector<uint32_t>& ids, const std::vector<Vec3>& positions,
                     const std::vector<uint32_t>& polygon) const;
-  void keep_polygon(const std::vector<uint32_t>& polygon, std::vector<uint32_t>& ids, std::vector<V3>& positions) const;
+  void keep_polygon(const std::vector<uint32_t>& polygon, std::vector<uint32_t>& ids, std::vector<Vec3>& positions) const;
   std::vector<CachedTriangulation> cache_;
   // Per region: what coloring_shape found of its coloring, and the polygon it was checked against.
   // Only the diagonals' use by other regions changes from one round to the next while the region
@@ -665,19 +651,19 @@ class Mesher {
     bool checked = false;
     bool shape_ok = false;
     std::vector<uint32_t> polygon, diagonals;  // input vertex ids; diagonals as pairs of polygon places
-    std::vector<V3> positions;
+    std::vector<Vec3> positions;
   };
   std::vector<CheckedColoring> checked_;
   // Per vertex: its anchor position, computed once per pass (it depends on the regions around the
   // vertex and their proxies, fixed for the pass, and on at_vertex_): position_state_ 0 none,
   // 1 + at_vertex_ when known.
   std::vector<uint8_t> position_state_;
-  std::vector<V3> known_position_;
+  std::vector<Vec3> known_position_;
 
   // Output of a meshing round.
   std::vector<uint32_t> out_id_;                // per vertex: output vertex of an anchor, else kNone
   std::vector<uint32_t> anchors_;               // output vertex -> input vertex
-  std::vector<V3> anchor_position_;
+  std::vector<Vec3> anchor_position_;
   std::vector<uint32_t> polygon_offsets_, polygon_vertices_;  // output vertex ids
   EdgeSet edges_;                               // chord edges and accepted diagonals
   std::vector<uint32_t> polygon_index_;         // per output vertex: its index in the polygon at hand, else kNone
@@ -854,7 +840,7 @@ void Mesher::loop_chords(uint32_t l, std::vector<Chord>& chords) const {
 }
 
 uint32_t Mesher::farthest(const Chord& c, uint32_t lo, uint32_t hi, double& distance) const {
-  V3 a = position(chord_vertex(c, lo)), b = position(chord_vertex(c, hi));
+  Vec3 a = position(chord_vertex(c, lo)), b = position(chord_vertex(c, hi));
   uint32_t best = kNone;
   distance = -1;
   for (uint32_t i = lo + 1; i < hi; ++i) {
@@ -880,7 +866,7 @@ uint32_t Mesher::subdivide(const Chord& c) {
   uint32_t region = chord_region(c), neighbor = chord_neighbor(c);
   double sine = 1;
   if (neighbor != kNone) {
-    V3 ni = proxies_.normal[region], nj = proxies_.normal[neighbor];
+    Vec3 ni = proxies_.normal[region], nj = proxies_.normal[neighbor];
     if (dot(ni, ni) > 0 && dot(nj, nj) > 0) sine = length(cross(ni, nj));
   }
   uint32_t added = 0;
@@ -1245,11 +1231,11 @@ void Mesher::color_region(uint32_t r, std::vector<HeapEntry>& heap, bool from_ch
 // segment, where to split it. Empty when the projected polygon is simple.
 std::vector<uint32_t> Mesher::crossing_splits(uint32_t region, const std::vector<uint32_t>& polygon) {
   std::vector<uint32_t> splits;
-  const V3 n = proxies_.normal[region];
+  const Vec3 n = proxies_.normal[region];
   if (dot(n, n) == 0) return splits;
-  V3 u = std::abs(n.x) < 0.6 ? cross(n, V3{1, 0, 0}) : cross(n, V3{0, 1, 0});
+  Vec3 u = std::abs(n.x) < 0.6 ? cross(n, Vec3{1, 0, 0}) : cross(n, Vec3{0, 1, 0});
   u = (1.0 / length(u)) * u;
-  const V3 w = cross(n, u);
+  const Vec3 w = cross(n, u);
   const size_t m = polygon.size();
   std::vector<double> x(m), y(m);
   for (size_t i = 0; i < m; ++i) x[i] = dot(anchor_position_[polygon[i]], u), y[i] = dot(anchor_position_[polygon[i]], w);
@@ -1370,8 +1356,8 @@ uint32_t Mesher::triangulate_polygon(uint32_t region, const std::vector<uint32_t
   std::vector<Vec3> corners;
   std::vector<uint8_t> allowed;
   polygon_tables(polygon, corners, allowed);
-  const V3 n = proxies_.normal[region];
-  const uint32_t cost = meshcvt::triangulate_polygon(corners, {n.x, n.y, n.z}, allowed, kTriangleRules, &pool_, tris);
+  const uint32_t cost =
+      meshcvt::triangulate_polygon(corners, proxies_.normal[region], allowed, kTriangleRules, &pool_, tris);
   for (uint32_t& t : tris) t = polygon[t];
   return cost;
 }
@@ -1382,10 +1368,7 @@ void Mesher::polygon_tables(const std::vector<uint32_t>& polygon, std::vector<Ve
                             std::vector<uint8_t>& allowed) const {
   const uint32_t m = uint32_t(polygon.size());
   corners.resize(m);
-  for (uint32_t i = 0; i < m; ++i) {
-    const V3 a = anchor_position_[polygon[i]];
-    corners[i] = {a.x, a.y, a.z};
-  }
+  for (uint32_t i = 0; i < m; ++i) corners[i] = anchor_position_[polygon[i]];
   allowed.assign(size_t(m) * m, 1);
   for (uint32_t i = 0; i < m; ++i)
     for (uint32_t j = i + 2; j < m; ++j)
@@ -1413,24 +1396,23 @@ bool Mesher::surely_imperfect(uint32_t region, const std::vector<uint32_t>& poly
   std::vector<Vec3> corners;
   std::vector<uint8_t> allowed;
   polygon_tables(polygon, corners, allowed);
-  const V3 n = proxies_.normal[region];
-  const std::optional<bool> perfect =
-      has_perfect_triangulation(corners, {n.x, n.y, n.z}, allowed, kTriangleRules, kPerfectTestBudget * m * m);
+  const std::optional<bool> perfect = has_perfect_triangulation(corners, proxies_.normal[region], allowed,
+                                                                kTriangleRules, kPerfectTestBudget * m * m);
   return perfect.has_value() && !*perfect;
 }
 
-bool Mesher::same_polygon(const std::vector<uint32_t>& ids, const std::vector<V3>& positions,
+bool Mesher::same_polygon(const std::vector<uint32_t>& ids, const std::vector<Vec3>& positions,
                           const std::vector<uint32_t>& polygon) const {
   if (ids.size() != polygon.size()) return false;
   for (size_t i = 0; i < polygon.size(); ++i) {
-    V3 a = positions[i], b = anchor_position_[polygon[i]];
+    Vec3 a = positions[i], b = anchor_position_[polygon[i]];
     if (ids[i] != anchors_[polygon[i]] || a.x != b.x || a.y != b.y || a.z != b.z) return false;
   }
   return true;
 }
 
 void Mesher::keep_polygon(const std::vector<uint32_t>& polygon, std::vector<uint32_t>& ids,
-                          std::vector<V3>& positions) const {
+                          std::vector<Vec3>& positions) const {
   ids.resize(polygon.size());
   positions.resize(polygon.size());
   for (size_t i = 0; i < polygon.size(); ++i) ids[i] = anchors_[polygon[i]], positions[i] = anchor_position_[polygon[i]];
@@ -1453,7 +1435,7 @@ bool Mesher::triangulate(bool last_round) {
     }
     position_state_[v] = uint8_t(1 + at_vertex_[v]);
     uint32_t seen[64], distinct = 0;
-    V3 sum{}, p = position(v);
+    Vec3 sum{}, p = position(v);
     if (at_vertex_[v]) {
       anchor_position_.push_back(known_position_[v] = rounded(p));
       continue;
@@ -1464,7 +1446,7 @@ bool Mesher::triangulate(bool last_round) {
       uint32_t r = labels_[f];
       if (std::find(seen, seen + distinct, r) != seen + distinct || distinct == 64) continue;
       seen[distinct++] = r;
-      V3 nr = proxies_.normal[r];
+      Vec3 nr = proxies_.normal[r];
       sum = sum + (p - dot(p - proxies_.centroid[r], nr) * nr);
     }
     anchor_position_.push_back(known_position_[v] = rounded(distinct ? (1.0 / distinct) * sum : p));
@@ -1813,7 +1795,7 @@ class PartitionRefiner {
       const std::vector<int64_t>& sums = it_.sums();
       auto S = [&](uint32_t c) {
         const int64_t* s = &sums[size_t(c) * kSumComponents];
-        return V3{double(s[1]), double(s[2]), double(s[3])};
+        return Vec3{double(s[1]), double(s[2]), double(s[3])};
       };
       uint32_t worst = 0;
       double worst_energy = -1;
@@ -1990,7 +1972,7 @@ uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const
   };
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
   std::vector<uint32_t> grown(labels.size(), kNone);
-  std::vector<V3> seed_normal;
+  std::vector<Vec3> seed_normal;
   uint32_t count = regions;
   for (uint32_t r = 0; r < regions; ++r) {
     if (!wanted[r] || seed_b[r] == kNone) continue;
@@ -2012,7 +1994,7 @@ uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const
     for (int k = 0; k < 3; ++k) {
       uint32_t o = topology.face_adjacent[3 * size_t(e.face) + k];
       if (o == kNone || grown[o] != kNone || labels[o] != labels[e.face] || g.collapsed[o]) continue;
-      V3 d = g.normal[o] - seed_normal[e.label];
+      Vec3 d = g.normal[o] - seed_normal[e.label];
       heap.push({dot(d, d), o, e.label});
     }
   }
@@ -2112,7 +2094,7 @@ ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topolog
   out.proxy_normals.resize(3 * size_t(out.regions));
   out.proxy_centroids.resize(3 * size_t(out.regions));
   for (uint32_t r = 0; r < out.regions; ++r) {
-    const V3 n = proxies.normal[r], x = proxies.centroid[r];
+    const Vec3 n = proxies.normal[r], x = proxies.centroid[r];
     out.proxy_normals[3 * r] = float(n.x), out.proxy_normals[3 * r + 1] = float(n.y), out.proxy_normals[3 * r + 2] = float(n.z);
     out.proxy_centroids[3 * r] = float(x.x), out.proxy_centroids[3 * r + 1] = float(x.y), out.proxy_centroids[3 * r + 2] = float(x.z);
   }
