@@ -207,7 +207,7 @@ class EdgeSet {
 // ---- per-face geometry and proxies
 
 struct FaceGeometry {
-  std::vector<Vec3> normal;    // unit normal, (0,0,0) for a face without area
+  std::vector<Vec3> normal;  // unit normal, (0,0,0) for a face without area
   std::vector<double> area;  // input units squared
   std::vector<Vec3> centroid;
   std::vector<uint8_t> collapsed;  // a repeated corner: no edges (see Topology), ignored by meshing
@@ -1452,7 +1452,7 @@ bool Mesher::triangulate(bool last_round) {
     anchor_position_.push_back(known_position_[v] = rounded(distinct ? (1.0 / distinct) * sum : p));
   }
   polygon_index_.assign(anchors_.size(), kNone);
-  // Polygons, and their edges.
+  // Polygons (their edges go into edges_ at the start of each try below).
   polygon_offsets_.assign(1, 0);
   polygon_vertices_.clear();
   for (uint32_t r = 0; r < regions_; ++r) {
