@@ -1530,6 +1530,7 @@ bool Mesher::triangulate(bool last_round) {
         // holds; else a new one.
         CachedTriangulation& cached = cache_[r];
         uint32_t cost = 1;
+        bool untriangulated = false;  // tested only: `tris` holds no triangulation of the polygon
         if (splits.empty()) {
           bool reused = same_polygon(cached.polygon, cached.positions, polygon);
           if (reused) {
@@ -1559,6 +1560,7 @@ bool Mesher::triangulate(bool last_round) {
             // rounds of a scan with holes, most of the dynamic programming's steps went to such
             // polygons). The polygon changes with the fix, so nothing is cached.
             cost = 1;
+            untriangulated = true;
             ++out_.stats.tested_polygons;
           } else {
             cost = triangulate_polygon(r, polygon, tris);
@@ -1600,7 +1602,10 @@ bool Mesher::triangulate(bool last_round) {
             continue;
           }
         }
-        if (!splits.empty()) cost = triangulate_polygon(r, polygon, tris);  // out of anchors: take the best
+        // Out of anchors: take the best. (A tested region always took its fix above, as
+        // fix_without_triangulation foresaw; were the two ever to disagree, it is triangulated here.)
+        assert(!untriangulated);
+        if (!splits.empty() || untriangulated) cost = triangulate_polygon(r, polygon, tris);
         ++out_.stats.fallback_regions;
         round_fixes.push_back({MeshingFix::fallback_triangulation, r, kNone, kNone, 0});
         if (cost > 0) {  // kept as it is: count what is wrong with it
