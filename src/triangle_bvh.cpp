@@ -138,6 +138,13 @@ struct Box {
       max[k] = std::max(max[k], p[k]);
     }
   }
+  // Grows by the three corners of a triangle, 3 floats each at corner[0..2] (fourth lane 0).
+  void grow_corners(const float* const corner[3]) {
+    for (int c = 0; c < 3; ++c) {
+      const float point[4] = {corner[c][0], corner[c][1], corner[c][2], 0.0f};
+      grow_point(point);
+    }
+  }
   // Half the surface area; infinite boxes (empty) give a meaningless value that is never used.
   float half_area() const {
     float dx = max[0] - min[0], dy = max[1] - min[1], dz = max[2] - min[2];
@@ -151,6 +158,23 @@ struct Box {
 inline float bin_scale(float extent) {
   float s = extent > 0 ? float(kBins) * (1.0f - 1e-6f) / extent : 0.0f;
   return std::isfinite(s) ? s : 0.0f;
+}
+
+// Corners of face f: 3 pointers to 3 floats each.
+inline void face_corners(const float* positions, const uint32_t* indices, uint32_t f, const float* corner[3]) {
+  for (int c = 0; c < 3; ++c) corner[c] = &positions[3 * size_t(indices[3 * size_t(f) + c])];
+}
+
+// The triangles of `faces`, in that order, 9 floats each: what the tree's leaves read.
+void gather_triangles(const float* positions, const uint32_t* indices, const std::vector<uint32_t>& faces,
+                      std::vector<float>& triangles) {
+  triangles.resize(9 * faces.size());
+  for (size_t i = 0; i < faces.size(); ++i) {
+    const float* corner[3];
+    face_corners(positions, indices, faces[i], corner);
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 3; ++k) triangles[9 * i + 3 * c + k] = corner[c][k];
+  }
 }
 
 // A triangle during the build is its box (fourth lanes 0); its face id travels in a parallel
@@ -410,12 +434,10 @@ class MortonBuilder {
     std::vector<float> center2(3 * size_t(n));
     Box cbox;
     for (uint32_t f = 0; f < n; ++f) {
+      const float* corner[3];
+      face_corners(positions_, indices_, f, corner);
       Box box;
-      for (int c = 0; c < 3; ++c) {
-        const float* v = &positions_[3 * size_t(indices_[3 * size_t(f) + c])];
-        const float point[4] = {v[0], v[1], v[2], 0.0f};
-        box.grow_point(point);
-      }
+      box.grow_corners(corner);
       float c2[4];
       centroid2(box, c2);
       cbox.grow_point(c2);
@@ -443,13 +465,7 @@ class MortonBuilder {
     codes_.resize(n);
     for (uint32_t i = 0; i < n; ++i) codes_[i] = code[faces[i]];
     code = std::vector<uint32_t>();
-    triangles.resize(9 * size_t(n));
-    for (uint32_t i = 0; i < n; ++i) {
-      const uint32_t f = faces[i];
-      for (int c = 0; c < 3; ++c)
-        for (int k = 0; k < 3; ++k)
-          triangles[9 * size_t(i) + 3 * c + k] = positions_[3 * size_t(indices_[3 * size_t(f) + c]) + k];
-    }
+    gather_triangles(positions_, indices_, faces, triangles);
     triangles_ = triangles.data();
     nodes_.assign(1, TriangleBvh::Node{});
     subtree(0, 0, n);
@@ -464,12 +480,11 @@ class MortonBuilder {
   Box subtree(uint32_t at, uint32_t begin, uint32_t end) {
     Box box;
     if (end - begin <= kLeaf) {
-      for (uint32_t i = begin; i < end; ++i)
-        for (int c = 0; c < 3; ++c) {
-          const float* v = &triangles_[9 * size_t(i) + 3 * c];
-          const float point[4] = {v[0], v[1], v[2], 0.0f};
-          box.grow_point(point);
-        }
+      for (uint32_t i = begin; i < end; ++i) {
+        const float* t = &triangles_[9 * size_t(i)];
+        const float* corner[3] = {t, t + 3, t + 6};
+        box.grow_corners(corner);
+      }
       TriangleBvh::Node& leaf = nodes_[at];
       for (int k = 0; k < 3; ++k) leaf.min[k] = box.min[k], leaf.max[k] = box.max[k];
       leaf.index = begin;
@@ -583,11 +598,9 @@ TriangleBvh::TriangleBvh(const float* positions, const uint32_t* indices, size_t
   Range all{0, F, 0, Box(), Box()};
   for (uint32_t f = 0; f < F; ++f) {
     PrimRef& p = prims[f];
-    for (int c = 0; c < 3; ++c) {
-      const float* v = &positions[3 * size_t(indices[3 * size_t(f) + c])];
-      float point[4] = {v[0], v[1], v[2], 0.0f};
-      p.grow_point(point);
-    }
+    const float* corner[3];
+    face_corners(positions, indices, f, corner);
+    p.grow_corners(corner);
     prim_faces[f] = f;
     all.box.grow(p);
     float c[4];
@@ -605,14 +618,8 @@ TriangleBvh::TriangleBvh(const float* positions, const uint32_t* indices, size_t
 
   // Triangles in leaf order: a leaf reads one contiguous run.
   prims = std::vector<PrimRef>();  // free before allocating the triangles
-  triangles_.resize(9 * size_t(F));
   faces_ = std::move(prim_faces);
-  for (uint32_t i = 0; i < F; ++i) {
-    uint32_t f = faces_[i];
-    for (int c = 0; c < 3; ++c)
-      for (int k = 0; k < 3; ++k)
-        triangles_[9 * size_t(i) + 3 * c + k] = positions[3 * size_t(indices[3 * size_t(f) + c]) + k];
-  }
+  gather_triangles(positions, indices, faces_, triangles_);
 }
 
 void TriangleBvh::set_nodes(const std::vector<Node>& nodes) {

@@ -156,8 +156,8 @@ struct MeshingStats {
   uint32_t fallback_regions = 0;      ///< regions triangulated directly (fallback_triangulation)
   uint32_t meshing_rounds = 0;        ///< 1 + rounds redone after anchor_position / flip_anchor fixes
   uint32_t reused_triangulations = 0; ///< direct triangulations kept from an earlier round (same polygon and positions)
-  /// direct triangulations left out of rounds that were to be redone anyway (regions out of fixes
-  /// whose diagonals no other region could want)
+  /// direct triangulations of regions out of fixes left out of a round's first try (made in the
+  /// second try when the round is kept; a round that is redone never makes them)
   uint32_t deferred_triangulations = 0;
   /// polygons found to have no acceptable triangulation without making one (their region then took
   /// a fix)
