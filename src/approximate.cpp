@@ -53,11 +53,14 @@
 //     triangulation exists while they cross); else the region's anchors are put at their mesh
 //     vertices (averaged projections can fold a thin region); else its most deviating chord is
 //     split, a few times. A region left with flipped triangles after that is too curved for one
-//     polygon: it is split in two by its normals and the whole meshing done again (at most
-//     kMaxSplitPasses passes); what remains is reported. A round's only use is its fixes until one
-//     has none: a region that will take a fix is only tested for an acceptable triangulation
+//     polygon: it is split in two by its normals and the whole meshing done again, until no region
+//     is left with any (at most kMaxSplitPasses passes, and none once no such region can be
+//     split); what remains is reported. A round's only use is its fixes until one has none: a
+//     region that will take a fix is only tested for an acceptable triangulation
 //     (has_perfect_triangulation), and a region out of fixes is not triangulated in a round that
-//     is redone (the round kept is done again with it).
+//     is redone (the round kept is done again with it). Likewise a pass that will be followed by a
+//     split stops once it knows a region to split: the regions left out of its last round's first
+//     try are only tested.
 //
 // Why this gives a closed manifold for closed manifold input: every region is a disk with one
 // polygon, every chord edge is shared by exactly the two polygons on its sides (in opposite
@@ -120,8 +123,6 @@ constexpr uint32_t kMaxTeleports = 32;
 // 5-90% between some of 1%), on smooth shapes they gain about 1% each for the cost of a boundary
 // iteration to convergence.
 constexpr double kTeleportMinGain = 0.02;
-// Meshing passes that split regions still giving flipped triangles (MeshingFix::split_curved).
-constexpr uint32_t kMaxSplitPasses = 4;
 // Interior vertices to color below which one thread does it (waking the workers costs more).
 constexpr uint64_t kMinParallelColoring = 4096;
 
@@ -510,12 +511,16 @@ class Mesher {
   Mesher(const Mesh& mesh, const Topology& topology, const FaceGeometry& geom, const EdgeGraph& edges,
          const std::vector<uint32_t>& labels, uint32_t regions, const Proxies& proxies, const MeshingOptions& options,
          WorkerPool& pool, ShapeApproximation& out, bool from_scratch, const FirstColorings* previous = nullptr,
-         FirstColorings* current = nullptr)
+         FirstColorings* current = nullptr, bool may_split = false)
       : mesh_(mesh), topology_(topology), geom_(geom), graph_(edges), labels_(labels), regions_(regions), proxies_(proxies),
         options_(options), pool_(pool), out_(out), nv_(uint32_t(mesh.vertex_count())),
-        nf_(uint32_t(mesh.face_count())), from_scratch_(from_scratch), previous_(previous), current_(current) {}
+        nf_(uint32_t(mesh.face_count())), from_scratch_(from_scratch), previous_(previous), current_(current),
+        may_split_(may_split) {}
 
   void run();
+  // False when the meshing stopped at finding curved regions (may_split; see triangulate()): then
+  // the output is not a mesh of the partition, and the caller splits those regions.
+  bool complete() const { return complete_; }
 
  private:
   enum AnchorKind : uint8_t { kNoAnchor = 0, kCorner, kChordAnchor, kFixAnchor };
@@ -573,6 +578,8 @@ class Mesher {
                       std::vector<uint8_t>& allowed) const;
   bool fix_without_triangulation(uint32_t region, const std::vector<uint32_t>& polygon) const;
   bool surely_imperfect(uint32_t region, const std::vector<uint32_t>& polygon) const;
+  std::optional<bool> perfect_triangulation(uint32_t region, const std::vector<uint32_t>& polygon) const;
+  bool curved_without_deferred(const std::vector<uint32_t>& deferred, std::vector<MeshingFix>& round_fixes);
   bool diagonal_free(uint32_t a, uint32_t b) const { return !edges_.contains(edge_key(a, b)); }
   void finish();
 
@@ -591,6 +598,10 @@ class Mesher {
   const bool from_scratch_;
   const FirstColorings* previous_;  // the last pass's first colorings, or null
   FirstColorings* current_;         // where this pass keeps its own, or null
+  // The caller splits the curved regions this pass finds (their flipped_triangles fixes) and
+  // meshes again: the pass may stop once it knows they are there (triangulate()).
+  const bool may_split_;
+  bool complete_ = true;
   double mean_edge_ = 0;
 
   std::vector<uint8_t> open_;       // per vertex: on a boundary or non-manifold edge
@@ -1391,14 +1402,22 @@ bool Mesher::fix_without_triangulation(uint32_t region, const std::vector<uint32
 // Whether the polygon surely has no acceptable triangulation (triangulate_polygon's cost > 0),
 // found without making one; false also when the test gave up.
 bool Mesher::surely_imperfect(uint32_t region, const std::vector<uint32_t>& polygon) const {
+  if (polygon.size() < kMinPerfectTest) return false;
+  const std::optional<bool> perfect = perfect_triangulation(region, polygon);
+  return perfect.has_value() && !*perfect;
+}
+
+// Whether the polygon has an acceptable triangulation (triangulate_polygon's cost == 0) with the
+// diagonals now in edges_, found without making one; nullopt when the test gave up or the
+// polygon is too large for the dynamic programming.
+std::optional<bool> Mesher::perfect_triangulation(uint32_t region, const std::vector<uint32_t>& polygon) const {
   const size_t m = polygon.size();
-  if (m < kMinPerfectTest || m > kMaxDynamicProgramming) return false;
+  if (m > kMaxDynamicProgramming) return std::nullopt;
   std::vector<Vec3> corners;
   std::vector<uint8_t> allowed;
   polygon_tables(polygon, corners, allowed);
-  const std::optional<bool> perfect = has_perfect_triangulation(corners, proxies_.normal[region], allowed,
-                                                                kTriangleRules, kPerfectTestBudget * m * m);
-  return perfect.has_value() && !*perfect;
+  return has_perfect_triangulation(corners, proxies_.normal[region], allowed, kTriangleRules,
+                                   kPerfectTestBudget * m * m);
 }
 
 bool Mesher::same_polygon(const std::vector<uint32_t>& ids, const std::vector<Vec3>& positions,
@@ -1416,6 +1435,42 @@ void Mesher::keep_polygon(const std::vector<uint32_t>& polygon, std::vector<uint
   ids.resize(polygon.size());
   positions.resize(polygon.size());
   for (size_t i = 0; i < polygon.size(); ++i) ids[i] = anchors_[polygon[i]], positions[i] = anchor_position_[polygon[i]];
+}
+
+// After a try of a round that left out the regions `deferred` (ascending) and asked for no fix:
+// whether a region is curved, its flipped triangles found by the try (in round_fixes) or, for the
+// regions left out, a polygon with no acceptable triangulation given the diagonals of the regions
+// before it (each gets a flipped_triangles fix, count 0: its triangles were not made). The
+// diagonals are those of the try's triangles, put into edges_ again region by region. False also
+// when a test gave up: then only the whole round can tell.
+bool Mesher::curved_without_deferred(const std::vector<uint32_t>& deferred, std::vector<MeshingFix>& round_fixes) {
+  bool curved = std::any_of(round_fixes.begin(), round_fixes.end(),
+                            [](const MeshingFix& f) { return f.kind == MeshingFix::flipped_triangles; });
+  std::vector<MeshingFix> found;
+  edges_.clear();
+  for (uint32_t r = 0; r < regions_; ++r) {
+    const uint32_t first = polygon_offsets_[r], count = polygon_offsets_[r + 1] - first;
+    for (uint32_t i = 0; i < count; ++i)
+      edges_.insert(edge_key(polygon_vertices_[first + i], polygon_vertices_[first + (i + 1) % count]));
+  }
+  std::vector<uint32_t> polygon;
+  size_t t = 0, next = 0;  // the next triangle of the try, the next region left out
+  for (uint32_t r = 0; r < regions_; ++r) {
+    if (next < deferred.size() && deferred[next] == r) {
+      ++next;
+      polygon.assign(polygon_vertices_.begin() + polygon_offsets_[r], polygon_vertices_.begin() + polygon_offsets_[r + 1]);
+      const std::optional<bool> perfect = perfect_triangulation(r, polygon);
+      if (!perfect.has_value()) return false;
+      if (!*perfect) found.push_back({MeshingFix::flipped_triangles, r, kNone, kNone, 0});
+      continue;
+    }
+    for (; t < triangle_regions_.size() && triangle_regions_[t] == r; ++t)
+      for (int j = 0; j < 3; ++j) edges_.insert(edge_key(triangles_[3 * t + j], triangles_[3 * t + (j + 1) % 3]));
+  }
+  assert(next == deferred.size() && t == triangle_regions_.size());
+  if (!curved && found.empty()) return false;
+  round_fixes.insert(round_fixes.end(), found.begin(), found.end());
+  return true;
 }
 
 // One meshing round with the current anchors. Returns false when anchors were added (redo).
@@ -1467,7 +1522,7 @@ bool Mesher::triangulate(bool last_round) {
   recolor();
 
   std::vector<MeshingFix> round_fixes;
-  std::vector<uint32_t> polygon, tris;
+  std::vector<uint32_t> polygon, tris, deferred_regions;
   std::vector<Chord> chords;
   // A region out of fixes (its anchors back at their vertices, its deviation anchors spent) takes
   // none whatever its triangulation, and a round that is redone drops every triangle it made. So
@@ -1493,7 +1548,7 @@ bool Mesher::triangulate(bool last_round) {
     out_.stats.flipped_triangles = 0;
     round_fixes.clear();
     bool redo = false;
-    uint32_t deferred = 0;
+    deferred_regions.clear();
     for (uint32_t r = 0; r < regions_; ++r) {
       if (!region_ok_[r]) continue;
       polygon.assign(polygon_vertices_.begin() + polygon_offsets_[r],
@@ -1551,7 +1606,7 @@ bool Mesher::triangulate(bool last_round) {
             out_.stats.reused_triangulations += reused;
           }
           if (!reused && defer && reverted_[r] && flip_anchors_[r] >= kMaxDeviationAnchors) {
-            ++deferred;
+            deferred_regions.push_back(r);
             continue;
           }
           if (reused) {
@@ -1633,9 +1688,21 @@ bool Mesher::triangulate(bool last_round) {
         triangle_regions_.push_back(r);
       }
     }
-    out_.stats.deferred_triangulations += deferred;
+    out_.stats.deferred_triangulations += uint32_t(deferred_regions.size());
     if (redo) return false;
-    if (deferred == 0) break;
+    if (deferred_regions.empty()) break;
+    // A pass followed by a split of its curved regions (may_split_) needs only to know which they
+    // are: its meshes are dropped, and the regions split and meshed again in the next pass. So the
+    // regions left out are tested, each where the try left it out, for an acceptable
+    // triangulation. If one has none, or another region came out with flipped triangles, the pass
+    // stops here. (Left out, the regions forbade no diagonals to the ones after them, so a try may
+    // find fewer curved regions than the whole round would; a pass that finds none is done in full
+    // and checked, and the next pass splits what that finds. On scans with holes the full rounds of
+    // the passes followed by a split were nearly all of the dynamic programming's steps.)
+    if (may_split_ && curved_without_deferred(deferred_regions, round_fixes)) {
+      complete_ = false;
+      break;
+    }
   }
   out_.fixes.insert(out_.fixes.end(), round_fixes.begin(), round_fixes.end());
   return true;
@@ -2075,25 +2142,41 @@ ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topolog
   const EdgeGraph edges = edge_graph(mesh, topology, geom, pool);
   Proxies proxies;
   FirstColorings previous, current;
+  bool unsplittable = false;  // the last split changed nothing: the next pass is the last
+  uint32_t passes = 0, shortened = 0;
   for (uint32_t pass = 0;; ++pass) {
     proxies = compute_proxies(geom, labels, count);
     out.fixes = partition_fixes;
     out.stats = MeshingStats{};
-    Mesher(mesh, topology, geom, edges, labels, count, proxies, options, pool, out, from_scratch,
-           pass > 0 ? &previous : nullptr, &current).run();
+    ++passes;
+    const bool may_split = !unsplittable && pass + 1 < kMaxSplitPasses;
+    Mesher mesher(mesh, topology, geom, edges, labels, count, proxies, options, pool, out, from_scratch,
+                  pass > 0 ? &previous : nullptr, &current, may_split);
+    mesher.run();
     std::swap(previous, current);
     // Regions still with flipped triangles are too curved for one polygon: split them, mesh again.
     std::vector<uint32_t> curved;
     for (const MeshingFix& f : out.fixes)
       if (f.kind == MeshingFix::flipped_triangles) curved.push_back(f.region);
-    if (curved.empty() || pass + 1 >= kMaxSplitPasses) break;
+    std::sort(curved.begin(), curved.end());  // (a pass that stopped early lists the tested ones last)
+    if (curved.empty() || !may_split) {
+      assert(mesher.complete());
+      break;
+    }
+    shortened += !mesher.complete();
     const uint32_t before = count;
     count = split_by_normals(topology, geom, proxies, labels, count, curved, MeshingFix::split_curved, partition_fixes);
     std::vector<uint8_t> changed(count, 0);  // the split regions and their new halves
     for (uint32_t r : curved) changed[r] = 1;
     std::fill(changed.begin() + before, changed.end(), uint8_t(1));
     count = make_disk_regions(mesh, topology, geom, labels, count, partition_fixes, &changed, &pool);
+    if (count == before) {  // regions of one face: the same partition again
+      if (mesher.complete()) break;
+      unsplittable = true;   // mesh it in full once more
+    }
   }
+  out.stats.meshing_passes = passes;
+  out.stats.shortened_passes = shortened;
   out.regions = count;
   out.labels = std::move(labels);
   out.proxy_normals.resize(3 * size_t(out.regions));

@@ -627,6 +627,38 @@ TEST_CASE("mesh_partition: a region too curved for one polygon is split by its n
   check_closed_manifold(s);
 }
 
+TEST_CASE("approximate: few proxies on a curved scan: regions are split until no triangle faces away") {
+  // The scanned elephant with 4 to 10 proxies: many regions are too curved for one polygon, and
+  // their halves again, for up to 18 passes of splits and meshing. Passes followed by a split stop
+  // once they know which regions to split (approximate.cpp, curved_without_deferred); the last
+  // pass is meshed in full. The output must be closed, manifold, one polygon per region, with no
+  // triangle facing away from its region (with at most 4 passes, as until the thirty-fifth
+  // session, 12, 9 and 6 of them did).
+  const Mesh m = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
+  const Topology t = build_topology(m);
+  uint32_t most_passes = 0, shortened = 0;
+  for (uint32_t n : {4u, 8u, 10u}) {
+    CAPTURE(n);
+    const ShapeApproximation s = approximate_shape(m, t, with_proxies(n));
+    CAPTURE(s.stats.meshing_passes);
+    check_closed_manifold(s);
+    check_polygons(s);
+    CHECK(flipped_triangles(s) == 0);
+    CHECK(s.stats.flipped_triangles == 0);
+    CHECK(s.stats.inconsistent_edges == 0);
+    CHECK(s.regions > n);
+    const size_t splits = size_t(std::count_if(s.fixes.begin(), s.fixes.end(),
+                                               [](const MeshingFix& f) { return f.kind == MeshingFix::split_curved; }));
+    CHECK(splits >= s.stats.meshing_passes - 1);  // every pass but the last split something
+    CHECK(s.stats.meshing_passes <= kMaxSplitPasses);
+    CHECK(s.stats.shortened_passes < s.stats.meshing_passes);
+    most_passes = std::max(most_passes, s.stats.meshing_passes);
+    shortened += s.stats.shortened_passes;
+  }
+  CHECK(most_passes > 4);
+  CHECK(shortened > 0);
+}
+
 TEST_CASE("mesh_partition: regions meeting only at two poles get a third anchor") {
   // Four orange slices of a sphere: every border runs from pole to pole, all four chords join the
   // same two anchors and each slice has only those two.

@@ -93,7 +93,8 @@ void write_report(const ApproximateArgs& a, const Mesh& mesh, const ReadStats& r
       .value("reused_triangulations", s.stats.reused_triangulations)
       .value("deferred_triangulations", s.stats.deferred_triangulations)
       .value("tested_polygons", s.stats.tested_polygons)
-      .value("copied_colorings", s.stats.copied_colorings).end_object();
+      .value("copied_colorings", s.stats.copied_colorings).value("meshing_passes", s.stats.meshing_passes)
+      .value("shortened_passes", s.stats.shortened_passes).end_object();
   j.begin_array("fixes");
   for (const MeshingFix& f : s.fixes) {
     j.begin_object().value("kind", to_string(f.kind));

@@ -55,6 +55,11 @@ enum class ChordRule {
 /// unflipped triangulation gets only a few, then the region is split: split_curved).
 inline constexpr uint32_t kMaxFlipAnchors = 32;
 
+/// Meshing passes at most: a pass whose regions still give flipped triangles splits them
+/// (MeshingFix::split_curved) and is followed by another. On the libcgal-demo meshes at 10
+/// proxies they end with none after 5-30 passes (bench/RESULTS.md, thirty-fifth session).
+inline constexpr uint32_t kMaxSplitPasses = 32;
+
 /// Default chord error for ChordRule::paper. Chosen on fandisk with 32 proxies so that the output
 /// is at least as close to the input (Hausdorff and RMS distance) as with CGAL's default rule
 /// (ChordRule::cgal, 5.0); see bench/RESULTS.md, "Shape approximation (L2,1)".
@@ -122,7 +127,8 @@ struct MeshingFix {
     flip_anchor,
     /// Unresolved after every fix of a meshing pass: `count` triangles of `region` face away from its
     /// proxy normal (or are slivers), or reuse an edge of another region. Such a region is split
-    /// (split_curved) and the meshing done again, up to 4 passes in all; the last pass's records
+    /// (split_curved) and the meshing done again, until no region has any, or no such region can
+    /// be split (a region of one face), or after kMaxSplitPasses passes; the last pass's records
     /// stay in the result (earlier passes' meshing records are replaced by the next pass's).
     flipped_triangles,
     /// `region` was too curved for one polygon (its triangulation kept flipped triangles): it was
@@ -165,6 +171,11 @@ struct MeshingStats {
   /// regions whose first coloring in a pass after a split_curved one was copied from the pass
   /// before (same faces, interior and border seeds)
   uint32_t copied_colorings = 0;
+  /// meshing passes: 1 + those after a split of curved regions (MeshingFix::split_curved)
+  uint32_t meshing_passes = 0;
+  /// passes that stopped once they found curved regions to split, before making every region's
+  /// triangles (their meshes are dropped: the next pass meshes the split partition)
+  uint32_t shortened_passes = 0;
   uint32_t vertex_anchors = 0;        ///< anchors placed at their mesh vertex (anchor_position)
   uint64_t flipped_triangles = 0;     ///< output triangles facing away from their proxy normal (0 unless reported)
   uint64_t boundary_edges = 0;        ///< output edges with one triangle
