@@ -174,11 +174,27 @@ void run_approximate(ApproximateArgs& a) {
   double write_s = std::chrono::duration<double>(Clock::now() - t0).count();
   if (!a.report.empty()) write_report(a, mesh, input.stats, s, input.seconds, write_s);
   if (!a.quiet) {
-    std::printf("%s: %zu faces -> %u regions (%u proxies), %zu vertices, %zu triangles; L2,1 E/A %.6g; "
+    // Regions beyond the proxies come from splits: say which, or a user asking for 10 proxies and
+    // getting 300 regions is left to guess.
+    uint64_t curved = 0, not_disks = 0, solid = 0;
+    for (const MeshingFix& f : s.fixes) {
+      if (f.kind == MeshingFix::split_curved) ++curved;
+      if (f.kind == MeshingFix::split_region) not_disks += f.count;
+      if (f.kind == MeshingFix::solid_component) ++solid;
+    }
+    std::string splits;
+    auto add = [&](uint64_t count, const char* why) {
+      if (count == 0) return;
+      splits += (splits.empty() ? "; split off: " : ", ") + std::to_string(count) + why;
+    };
+    add(curved, " as too curved for one polygon");
+    add(not_disks, " as not disks");
+    add(solid, " to keep closed parts solid");
+    std::printf("%s: %zu faces -> %u regions (%u proxies%s), %zu vertices, %zu triangles; L2,1 E/A %.6g; "
                 "%zu fixes; %.3f s partition + %.3f s meshing; wrote %s\n",
-                a.input.c_str(), mesh.face_count(), s.regions, s.partition_proxies, s.mesh.vertex_count(),
-                s.mesh.face_count(), s.relative_error, s.fixes.size(), s.partition_seconds, s.meshing_seconds,
-                a.output.c_str());
+                a.input.c_str(), mesh.face_count(), s.regions, s.partition_proxies, splits.c_str(),
+                s.mesh.vertex_count(), s.mesh.face_count(), s.relative_error, s.fixes.size(), s.partition_seconds,
+                s.meshing_seconds, a.output.c_str());
     if (s.stats.flipped_triangles || s.stats.nonmanifold_edges)
       std::printf("warning: %llu triangles face away from their region, %llu non-manifold edges\n",
                   (unsigned long long)s.stats.flipped_triangles, (unsigned long long)s.stats.nonmanifold_edges);

@@ -76,9 +76,25 @@ assert rounds and rounds[-1]["relative_error"] <= 0.15
 assert all(a["proxies"] < b["proxies"] for a, b in zip(rounds, rounds[1:]))
 PY
 
-# The summary line names the counts.
-out=$("$cli" approximate "$data/elephant.off" -n 12 --device cpu -o "$tmp/s.obj")
+# The summary line names the counts, and where the regions beyond the proxies come from (the
+# report's split fixes): with 12 proxies on the elephant, regions too curved for one polygon and
+# regions that are not disks.
+out=$("$cli" approximate "$data/elephant.off" -n 12 --device cpu -o "$tmp/s.obj" --report "$tmp/s.json")
 echo "$out" | grep -q "regions" || fail "no summary line: $out"
+$py - "$out" "$tmp/s.json" <<'PY' || fail "summary line against the report: $out"
+import json, re, sys
+r = json.load(open(sys.argv[2]))
+fixes = r["fixes"]
+curved = sum(f["kind"] == "split_curved" for f in fixes)
+disks = sum(f.get("count", 0) for f in fixes if f["kind"] == "split_region")
+solid = sum(f["kind"] == "solid_component" for f in fixes)
+assert curved > 0 and disks > 0, (curved, disks)
+assert r["regions"] == 12 + curved + disks + solid
+m = re.search(r"-> (\d+) regions \(12 proxies; split off: (\d+) as too curved for one polygon, (\d+) as not disks\)",
+              sys.argv[1])
+assert m, "no split counts"
+assert [int(x) for x in m.groups()] == [r["regions"], curved, disks]
+PY
 
 # Bad usage: exit 2, nothing written.
 expect_fail() {
