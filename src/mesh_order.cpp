@@ -78,7 +78,7 @@ LocalityOrder reorder_for_locality(Mesh& mesh, size_t min_faces, unsigned thread
       key[f] = code;
     }
   });
-  order.face_of = sort_by_key(key);
+  order.face_of = sort_by_key(key, face_parts);
   std::vector<uint32_t>().swap(key);
 
   // The corners in the new face order, still with the input's vertex ids: the passes below read

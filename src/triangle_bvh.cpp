@@ -5,8 +5,9 @@
 // most kMaxLeaf triangles, the top subtrees built by separate threads and joined in a fixed order.
 // Below depth kSahDepth the split falls back to the object median, so the depth stays bounded (and
 // the traversal stack fixed) whatever the triangle distribution. Or (Build::morton, MortonBuilder)
-// along a Morton curve of the centroids: a radix sort and one linear pass, for trees queried only
-// a few times per face.
+// along a Morton curve of the centroids: a radix sort and one linear pass, both in ranges side by
+// side on several threads, for trees queried only a few times per face. Either way the tree is the
+// same for any thread count.
 // Traversal: depth first, nearer child first, a subtree skipped only when its box is farther than
 // the best distance found so far plus a rounding tolerance.
 #include "triangle_bvh.h"
@@ -15,6 +16,7 @@
 #include <atomic>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 #include <exception>
 #include <system_error>
 #include <thread>
@@ -165,16 +167,19 @@ inline void face_corners(const float* positions, const uint32_t* indices, uint32
   for (int c = 0; c < 3; ++c) corner[c] = &positions[3 * size_t(indices[3 * size_t(f) + c])];
 }
 
-// The triangles of `faces`, in that order, 9 floats each: what the tree's leaves read.
+// The triangles of `faces`, in that order, 9 floats each: what the tree's leaves read. In `parts`
+// ranges side by side.
 void gather_triangles(const float* positions, const uint32_t* indices, const std::vector<uint32_t>& faces,
-                      std::vector<float>& triangles) {
+                      std::vector<float>& triangles, unsigned parts = 1) {
   triangles.resize(9 * faces.size());
-  for (size_t i = 0; i < faces.size(); ++i) {
-    const float* corner[3];
-    face_corners(positions, indices, faces[i], corner);
-    for (int c = 0; c < 3; ++c)
-      for (int k = 0; k < 3; ++k) triangles[9 * i + 3 * c + k] = corner[c][k];
-  }
+  run_ranges(even_bounds(faces.size(), parts), [&](size_t begin, size_t end, size_t) {
+    for (size_t i = begin; i < end; ++i) {
+      const float* corner[3];
+      face_corners(positions, indices, faces[i], corner);
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 3; ++k) triangles[9 * i + 3 * c + k] = corner[c][k];
+    }
+  });
 }
 
 // A triangle during the build is its box (fourth lanes 0); its face id travels in a parallel
@@ -418,11 +423,15 @@ class Builder {
 // code split at their middle. No surface-area sweep and no partition: the radix sort of the
 // locality order (morton.h) and one pass that fills the boxes on the way back up. Depth at most
 // 30 (the code's bits) + 32 (middles).
+// On several threads every pass runs in ranges side by side, and the subtrees below the top
+// levels are built side by side, each into a list of its own, then laid out where one thread
+// puts them: the tree is the same to the byte for any thread count.
 class MortonBuilder {
  public:
-  // The mesh's faces (3 indices each into xyz positions), as the constructor takes them.
-  MortonBuilder(const float* positions, const uint32_t* indices, uint32_t faces)
-      : positions_(positions), indices_(indices), n_(faces) {}
+  // The mesh's faces (3 indices each into xyz positions), as the constructor takes them; `parts`
+  // threads (1: this one only).
+  MortonBuilder(const float* positions, const uint32_t* indices, uint32_t faces, unsigned parts)
+      : positions_(positions), indices_(indices), n_(faces), parts_(std::max(1u, parts)) {}
 
   // Fills `faces` (input face per leaf slot) and `triangles` (9 floats per slot, leaf order) and
   // returns the nodes. No per-face box is kept: the codes need only the centroids, and a leaf's
@@ -430,19 +439,27 @@ class MortonBuilder {
   // boxes were 150 MB written, copied in sorted order and read once).
   NodeList build(std::vector<uint32_t>& faces, std::vector<float>& triangles) {
     const uint32_t n = n_;
-    // Twice each face's box center (centroid2 of its PrimRef, to the bit), and their box.
+    const std::vector<uint32_t> bounds = even_bounds(n, parts_);
+    // Twice each face's box center (centroid2 of its PrimRef, to the bit), and their box (min and
+    // max: the same whatever the ranges).
     std::vector<float> center2(3 * size_t(n));
+    std::vector<Box> part_cbox(parts_);
+    run_ranges(bounds, [&](size_t begin, size_t end, size_t part) {
+      Box cbox;
+      for (size_t f = begin; f < end; ++f) {
+        const float* corner[3];
+        face_corners(positions_, indices_, uint32_t(f), corner);
+        Box box;
+        box.grow_corners(corner);
+        float c2[4];
+        centroid2(box, c2);
+        cbox.grow_point(c2);
+        for (int k = 0; k < 3; ++k) center2[3 * f + k] = c2[k];
+      }
+      part_cbox[part] = cbox;
+    });
     Box cbox;
-    for (uint32_t f = 0; f < n; ++f) {
-      const float* corner[3];
-      face_corners(positions_, indices_, f, corner);
-      Box box;
-      box.grow_corners(corner);
-      float c2[4];
-      centroid2(box, c2);
-      cbox.grow_point(c2);
-      for (int k = 0; k < 3; ++k) center2[3 * size_t(f) + k] = c2[k];
-    }
+    for (const Box& b : part_cbox) cbox.grow(b);
     float lo[3], scale[3];
     for (int k = 0; k < 3; ++k) {
       lo[k] = cbox.min[k];
@@ -451,33 +468,59 @@ class MortonBuilder {
       if (!std::isfinite(scale[k])) scale[k] = 0.0f;
     }
     std::vector<uint32_t> code(n);
-    for (uint32_t i = 0; i < n; ++i) {
-      uint32_t key = 0;
-      for (int k = 0; k < 3; ++k) {
-        const float t = std::clamp((center2[3 * size_t(i) + k] - lo[k]) * scale[k], 0.0f, 1023.0f);
-        key |= spread_bits(uint32_t(t)) << k;
+    run_ranges(bounds, [&](size_t begin, size_t end, size_t) {
+      for (size_t i = begin; i < end; ++i) {
+        uint32_t key = 0;
+        for (int k = 0; k < 3; ++k) {
+          const float t = std::clamp((center2[3 * i + k] - lo[k]) * scale[k], 0.0f, 1023.0f);
+          key |= spread_bits(uint32_t(t)) << k;
+        }
+        code[i] = key;
       }
-      code[i] = key;
-    }
+    });
     center2 = std::vector<float>();
     // Stable: equal codes keep the faces' order, so the tree is a function of the mesh alone.
-    faces = sort_by_key(code);
+    faces = sort_by_key(code, parts_);
     codes_.resize(n);
-    for (uint32_t i = 0; i < n; ++i) codes_[i] = code[faces[i]];
+    run_ranges(bounds, [&](size_t begin, size_t end, size_t) {
+      for (size_t i = begin; i < end; ++i) codes_[i] = code[faces[i]];
+    });
     code = std::vector<uint32_t>();
-    gather_triangles(positions_, indices_, faces, triangles);
+    gather_triangles(positions_, indices_, faces, triangles, parts_);
     triangles_ = triangles.data();
-    nodes_.assign(1, TriangleBvh::Node{});
-    subtree(0, 0, n);
+    NodeList nodes;
+    if (parts_ == 1 || n <= kParallelMin) {
+      nodes.assign(1, TriangleBvh::Node{});
+      subtree(nodes, 0, 0, n);
+    } else {
+      nodes = build_side_by_side(n);
+    }
     codes_ = std::vector<uint32_t>();  // freed before the caller turns the nodes into pairs
-    return std::move(nodes_);
+    return nodes;
   }
 
  private:
   static constexpr uint32_t kLeaf = 4;  // ranges this small are leaves
 
-  // Fills node `at` with the subtree of [begin, end) and returns its box.
-  Box subtree(uint32_t at, uint32_t begin, uint32_t end) {
+  // Where [begin, end) (more than kLeaf triangles) splits: the first code with the leading bit in
+  // which the range's codes differ set (codes are sorted), or the middle when they are all equal.
+  uint32_t split_at(uint32_t begin, uint32_t end) const {
+    uint32_t mid = begin + (end - begin) / 2;
+    const uint32_t differ = codes_[begin] ^ codes_[end - 1];
+    if (differ != 0) {
+      const uint32_t bit = 1u << (31 - __builtin_clz(differ));
+      mid = uint32_t(std::partition_point(codes_.begin() + begin, codes_.begin() + end,
+                                          [bit](uint32_t c) { return (c & bit) == 0; }) -
+                     codes_.begin());
+    }
+    assert(mid > begin && mid < end);
+    return mid;
+  }
+
+  // Fills nodes[at] with the subtree of [begin, end), its descendants appended to `nodes` (a
+  // node's two children side by side, the left one's subtree before the right one's), and
+  // returns its box.
+  Box subtree(NodeList& nodes, uint32_t at, uint32_t begin, uint32_t end) const {
     Box box;
     if (end - begin <= kLeaf) {
       for (uint32_t i = begin; i < end; ++i) {
@@ -485,38 +528,118 @@ class MortonBuilder {
         const float* corner[3] = {t, t + 3, t + 6};
         box.grow_corners(corner);
       }
-      TriangleBvh::Node& leaf = nodes_[at];
+      TriangleBvh::Node& leaf = nodes[at];
       for (int k = 0; k < 3; ++k) leaf.min[k] = box.min[k], leaf.max[k] = box.max[k];
       leaf.index = begin;
       leaf.count = end - begin;
       return box;
     }
-    uint32_t mid = begin + (end - begin) / 2;
-    const uint32_t differ = codes_[begin] ^ codes_[end - 1];
-    if (differ != 0) {  // the first code with the leading differing bit set (codes are sorted)
-      const uint32_t bit = 1u << (31 - __builtin_clz(differ));
-      mid = uint32_t(std::partition_point(codes_.begin() + begin, codes_.begin() + end,
-                                          [bit](uint32_t c) { return (c & bit) == 0; }) -
-                     codes_.begin());
-    }
-    assert(mid > begin && mid < end);
-    const uint32_t first = uint32_t(nodes_.size());
-    nodes_.resize(nodes_.size() + 2);
-    box = subtree(first, begin, mid);
-    box.grow(subtree(first + 1, mid, end));
-    TriangleBvh::Node& inner = nodes_[at];
+    const uint32_t mid = split_at(begin, end);
+    const uint32_t first = uint32_t(nodes.size());
+    nodes.resize(nodes.size() + 2);
+    box = subtree(nodes, first, begin, mid);
+    box.grow(subtree(nodes, first + 1, mid, end));
+    TriangleBvh::Node& inner = nodes[at];
     for (int k = 0; k < 3; ++k) inner.min[k] = box.min[k], inner.max[k] = box.max[k];
     inner.index = first;
     inner.count = 0;
     return box;
   }
 
+  // The tree of [0, n) as subtree() makes it on one thread, made on parts_ threads. The top levels
+  // are split here down to ranges of at most `grain` triangles (tasks); the tasks' subtrees are
+  // built side by side, each into a list of its own (its root first, its descendants from 1 on, as
+  // subtree() makes it), then copied to where one thread would have put them: walking the top
+  // levels in the same order, a task's root goes where its parent put it and its descendants
+  // follow the nodes placed so far, so list entry i >= 1 lands at (cursor + i - 1) and an inner
+  // node's child index moves by cursor - 1.
+  NodeList build_side_by_side(uint32_t n) const {
+    struct Top {
+      uint32_t begin, end;
+      uint32_t left = kNone, right = kNone;  // top nodes (inner), or
+      uint32_t task = kNone;                 // the task building this range
+    };
+    const uint32_t grain = std::max(kParallelMin, uint32_t(n / (8 * size_t(parts_))));
+    std::vector<Top> top;
+    std::vector<std::pair<uint32_t, uint32_t>> tasks;  // ranges, in depth-first order
+    auto split_top = [&](auto& self, uint32_t begin, uint32_t end) -> uint32_t {
+      const uint32_t id = uint32_t(top.size());
+      top.push_back({begin, end});
+      if (end - begin <= grain) {
+        top[id].task = uint32_t(tasks.size());
+        tasks.push_back({begin, end});
+        return id;
+      }
+      const uint32_t mid = split_at(begin, end);
+      const uint32_t left = self(self, begin, mid);
+      const uint32_t right = self(self, mid, end);
+      top[id].left = left, top[id].right = right;
+      return id;
+    };
+    split_top(split_top, 0, n);
+
+    std::vector<NodeList> lists(tasks.size());
+    std::atomic<size_t> next{0};  // tasks are claimed in order by whichever thread is free
+    run_ranges(even_bounds(parts_, parts_), [&](size_t, size_t, size_t) {
+      for (size_t t; (t = next.fetch_add(1)) < tasks.size();) {
+        lists[t].assign(1, TriangleBvh::Node{});
+        subtree(lists[t], 0, tasks[t].first, tasks[t].second);
+      }
+    });
+
+    // Positions: a top inner node's children get the next two slots, then its left subtree's
+    // descendants, then its right one's, as in subtree().
+    std::vector<uint32_t> task_root(tasks.size()), task_cursor(tasks.size());
+    std::vector<std::pair<uint32_t, uint32_t>> inner;  // top inner nodes: (position, first child), parents first
+    uint32_t cursor = 1;
+    auto place = [&](auto& self, uint32_t id, uint32_t at) -> void {
+      const Top& t = top[id];
+      if (t.task != kNone) {
+        task_root[t.task] = at;
+        task_cursor[t.task] = cursor;
+        cursor += uint32_t(lists[t.task].size()) - 1;
+        return;
+      }
+      const uint32_t first = cursor;
+      cursor += 2;
+      inner.push_back({at, first});
+      self(self, t.left, first);
+      self(self, t.right, first + 1);
+    };
+    place(place, 0, 0);
+    NodeList nodes(cursor);
+    run_ranges(even_bounds(tasks.size(), unsigned(std::min<size_t>(parts_, tasks.size()))),
+               [&](size_t begin, size_t end, size_t) {
+                 for (size_t t = begin; t < end; ++t) {
+                   const uint32_t shift = task_cursor[t] - 1;
+                   const NodeList& list = lists[t];
+                   for (size_t i = 0; i < list.size(); ++i) {
+                     TriangleBvh::Node node = list[i];
+                     if (node.count == 0) node.index += shift;
+                     nodes[i == 0 ? task_root[t] : shift + i] = node;
+                   }
+                   NodeList().swap(lists[t]);  // (freed as it goes: the lists hold as many nodes as the tree)
+                 }
+               });
+    // The top inner nodes, children before parents: the box of both children (min and max, as
+    // subtree() grows it).
+    for (size_t k = inner.size(); k-- > 0;) {
+      const auto [at, first] = inner[k];
+      const TriangleBvh::Node &a = nodes[first], &b = nodes[first + 1];
+      TriangleBvh::Node& node = nodes[at];
+      for (int d = 0; d < 3; ++d) node.min[d] = std::min(a.min[d], b.min[d]), node.max[d] = std::max(a.max[d], b.max[d]);
+      node.index = first;
+      node.count = 0;
+    }
+    return nodes;
+  }
+
   const float* positions_;
   const uint32_t* indices_;
   const uint32_t n_;
+  const unsigned parts_;
   const float* triangles_ = nullptr;
   std::vector<uint32_t> codes_;  // Morton code of leaf slot i, after the sort
-  NodeList nodes_;
 };
 
 }  // namespace
@@ -589,7 +712,10 @@ TriangleBvh::TriangleBvh(const float* positions, const uint32_t* indices, size_t
   assert(face_count < size_t(kNone));
   const uint32_t F = uint32_t(face_count);
   if (build == Build::morton) {
-    set_nodes(MortonBuilder(positions, indices, F).build(faces_, triangles_));
+    // (range_threads: one thread per 32k faces at most when threads is 0; below kParallelMin
+    // faces starting threads costs more than it saves.)
+    const unsigned parts = F > kParallelMin ? range_threads(F, threads) : 1;
+    set_nodes(MortonBuilder(positions, indices, F, parts).build(faces_, triangles_), parts);
     return;
   }
 
@@ -622,16 +748,27 @@ TriangleBvh::TriangleBvh(const float* positions, const uint32_t* indices, size_t
   gather_triangles(positions, indices, faces_, triangles_);
 }
 
-void TriangleBvh::set_nodes(const std::vector<Node>& nodes) {
+void TriangleBvh::set_nodes(const std::vector<Node>& nodes, unsigned parts) {
   // Node i of the list becomes node i + 1 (the root stays 0, node 1 is unused), so sibling pairs
   // start at even indices and fill one NodePair each.
   pairs_.resize((nodes.size() + 1) / 2);
-  for (size_t i = 0; i < nodes.size(); ++i) {
-    Node n = nodes[i];
-    if (n.count == 0) n.index += 1;
-    size_t at = i == 0 ? 0 : i + 1;
-    pairs_[at / 2].node[at % 2] = n;
-  }
+  run_ranges(even_bounds(nodes.size(), parts), [&](size_t begin, size_t end, size_t) {
+    for (size_t i = begin; i < end; ++i) {
+      Node n = nodes[i];
+      if (n.count == 0) n.index += 1;
+      size_t at = i == 0 ? 0 : i + 1;
+      pairs_[at / 2].node[at % 2] = n;
+    }
+  });
+}
+
+bool operator==(const TriangleBvh& a, const TriangleBvh& b) {
+  // (Bytes, not values: the boxes' floats are compared as stored. memcmp takes no null pointer,
+  // even for no bytes.)
+  auto same_bytes = [](const auto& x, const auto& y) {
+    return x.size() == y.size() && (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0);
+  };
+  return same_bytes(a.pairs_, b.pairs_) && same_bytes(a.triangles_, b.triangles_) && a.faces_ == b.faces_;
 }
 
 void TriangleBvh::bounds(float min[3], float max[3]) const {

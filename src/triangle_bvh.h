@@ -48,7 +48,8 @@ class TriangleBvh {
     /// The faces sorted along a Morton curve of their centroids, split where the curve's leading
     /// bit changes (a linear BVH, Lauterbach et al. 2009): about 0.14 s per million faces on one
     /// thread (the 4.8M-face bunny: 0.67-0.69 s on 2026-11-28's VM, where the SAH build took 2.15 s
-    /// and 1.42 s on two threads some days before), queries somewhat slower. Always on one thread.
+    /// and 1.42 s on two threads some days before), queries somewhat slower. Every pass and the
+    /// subtrees below the top levels run on `threads` threads (meshes above 65536 faces).
     /// For trees queried a few times per face (approximation_error).
     morton,
   };
@@ -79,6 +80,9 @@ class TriangleBvh {
   void closest_points(const double* queries, size_t count, Hit* hits, unsigned threads = 0) const;
 
   size_t face_count() const { return faces_.size(); }
+  /// Whether two trees are the same to the byte: nodes, leaf order and triangles (the builds give
+  /// the same tree for any thread count; tests check it).
+  friend bool operator==(const TriangleBvh& a, const TriangleBvh& b);
   size_t node_count() const { return pairs_.empty() ? 0 : 2 * pairs_.size() - 1; }
   /// Bounding box of every face (zeros when empty).
   void bounds(float min[3], float max[3]) const;
@@ -101,7 +105,8 @@ class TriangleBvh {
   };
   const Node& node(uint32_t i) const { return pairs_[i >> 1].node[i & 1]; }
   void prefetch_target(const Node& n) const;
-  void set_nodes(const std::vector<Node>& nodes);  // the builders' node lists, as pairs
+  // The builders' node lists, as pairs (in `parts` ranges side by side).
+  void set_nodes(const std::vector<Node>& nodes, unsigned parts = 1);
   std::vector<NodePair> pairs_;
   std::vector<float> triangles_;  // 9 floats per triangle, in leaf order
   std::vector<uint32_t> faces_;   // input face id per triangle, in leaf order

@@ -385,18 +385,43 @@ TEST_CASE("TriangleBvh: a tree built by several threads answers like one built b
       indices.insert(indices.end(), {v, v + 1, v + n + 2, v, v + n + 2, v + n + 1});
     }
   const size_t faces = indices.size() / 3;
-  TriangleBvh one(positions.data(), indices.data(), faces, 1);
-  TriangleBvh four(positions.data(), indices.data(), faces, 4);
-  CHECK(one.node_count() == four.node_count());
   std::vector<float> soup;
   for (uint32_t v : indices) soup.insert(soup.end(), positions.begin() + 3 * v, positions.begin() + 3 * v + 3);
-  Rng rng(77);
-  for (int i = 0; i < 300; ++i) {
-    double q[3] = {rng.uniform(-0.1, 1.1), rng.uniform(-0.1, 1.1), rng.uniform(-0.2, 0.2)};
-    TriangleBvh::Hit a = one.closest_point(q);
-    check_same(four.closest_point(q), a);
-    if (i < 4) check_same(a, brute_force(soup, q));
+  for (TriangleBvh::Build build : {TriangleBvh::Build::sah, TriangleBvh::Build::morton}) {
+    CAPTURE(int(build));
+    TriangleBvh one(positions.data(), indices.data(), faces, 1, build);
+    // The same tree to the byte on any number of threads (the Morton build's subtrees are laid out
+    // where one thread puts them; 16: tasks of 65536 faces at most, more than 2 per thread).
+    for (unsigned threads : {2u, 3u, 4u, 16u}) {
+      CAPTURE(threads);
+      TriangleBvh many(positions.data(), indices.data(), faces, threads, build);
+      CHECK(one.node_count() == many.node_count());
+      CHECK(one == many);
+    }
+    TriangleBvh four(positions.data(), indices.data(), faces, 4, build);
+    Rng rng(77);
+    for (int i = 0; i < 300; ++i) {
+      double q[3] = {rng.uniform(-0.1, 1.1), rng.uniform(-0.1, 1.1), rng.uniform(-0.2, 0.2)};
+      TriangleBvh::Hit a = one.closest_point(q);
+      check_same(four.closest_point(q), a);
+      if (i < 4) check_same(a, brute_force(soup, q));
+    }
   }
+  // A soup of 90,000 random triangles (slivers, needles, degenerates): children's boxes differ
+  // along every axis, unlike the grid's halves.
+  const Soup random = random_soup(90000, 11);
+  const TriangleBvh soup_one(random.positions.data(), random.indices.data(), random.faces(), 1,
+                             TriangleBvh::Build::morton);
+  for (unsigned threads : {2u, 5u}) {
+    CAPTURE(threads);
+    CHECK(soup_one == TriangleBvh(random.positions.data(), random.indices.data(), random.faces(), threads,
+                                  TriangleBvh::Build::morton));
+  }
+  // The comparison sees a difference: the same faces in another order make another tree.
+  std::vector<uint32_t> reversed;
+  for (size_t f = faces; f-- > 0;) reversed.insert(reversed.end(), indices.begin() + 3 * f, indices.begin() + 3 * f + 3);
+  CHECK_FALSE(TriangleBvh(positions.data(), indices.data(), faces, 1, TriangleBvh::Build::morton) ==
+              TriangleBvh(positions.data(), reversed.data(), faces, 1, TriangleBvh::Build::morton));
 }
 
 TEST_CASE("TrianglePrisms: known bounds around a right triangle") {
