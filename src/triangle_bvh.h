@@ -47,9 +47,10 @@ class TriangleBvh {
     sah,
     /// The faces sorted along a Morton curve of their centroids, split where the curve's leading
     /// bit changes (a linear BVH, Lauterbach et al. 2009): about 0.14 s per million faces on one
-    /// thread (the 4.8M-face bunny: 0.67-0.69 s on 2026-11-28's VM, where the SAH build took 2.15 s
-    /// and 1.42 s on two threads some days before), queries somewhat slower. Every pass and the
-    /// subtrees below the top levels run on `threads` threads (meshes above 65536 faces).
+    /// thread (the 4.8M-face bunny: 0.64-0.68 s on 2026-11-28's VM, 0.48-0.50 s on two, where the
+    /// SAH build took 2.15 s and 1.42 s on two threads some days before), queries somewhat slower.
+    /// Every pass and the subtrees below the top levels run on `threads` threads (meshes above
+    /// 65536 faces).
     /// For trees queried a few times per face (approximation_error).
     morton,
   };
