@@ -2143,12 +2143,11 @@ ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topolog
   Proxies proxies;
   FirstColorings previous, current;
   bool unsplittable = false;  // the last split changed nothing: the next pass is the last
-  uint32_t passes = 0, shortened = 0;
-  for (uint32_t pass = 0;; ++pass) {
+  uint32_t pass = 0, shortened = 0;
+  for (;; ++pass) {
     proxies = compute_proxies(geom, labels, count);
     out.fixes = partition_fixes;
     out.stats = MeshingStats{};
-    ++passes;
     const bool may_split = !unsplittable && pass + 1 < kMaxSplitPasses;
     Mesher mesher(mesh, topology, geom, edges, labels, count, proxies, options, pool, out, from_scratch,
                   pass > 0 ? &previous : nullptr, &current, may_split);
@@ -2175,7 +2174,7 @@ ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topolog
       unsplittable = true;   // mesh it in full once more
     }
   }
-  out.stats.meshing_passes = passes;
+  out.stats.meshing_passes = pass + 1;
   out.stats.shortened_passes = shortened;
   out.regions = count;
   out.labels = std::move(labels);
