@@ -207,7 +207,9 @@ const RegisterCommand reg(40, [](CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "approximate", "Approximate the shape with a compact mesh from an L2,1 partition (Fan et al. 6.2, VSA)");
   sub->add_option("input", a->input, "input mesh (.obj .off .ply .stl)")->required();
-  CLI::Option* n = sub->add_option("-n,--proxies", a->proxies, "number of proxies (regions)");
+  CLI::Option* n = sub->add_option("-n,--proxies", a->proxies,
+                                   "number of proxies: the partition's regions (the meshing splits regions that are "
+                                   "not disks or too curved for one polygon)");
   CLI::Option* e = sub->add_option(
       "--max-error", a->max_error,
       "instead of -n: add proxies until the L2,1 distortion per area E/A is at most this (scale-free, 0..4)");
