@@ -244,7 +244,8 @@ ApproximationError approximation_error(const Mesh& a, const Mesh& ref, uint64_t 
   // does not need it: one thread builds it while the others measure the larger mesh's points
   // against the smaller tree, and joins them once built; then every thread measures against it.
   // From four threads on, half of them build it (its passes and subtrees side by side: 0.49 s on
-  // two) and the other half measure: on one it was the longest part of the job with many cores.
+  // two) and the other half measure: built by one thread, it was the longest part of the job on
+  // many cores.
   const unsigned build_threads = threads >= 4 ? threads / 2 : 1;
   const unsigned measure_threads = std::max(1u, threads - build_threads);
   const bool a_is_small = a.face_count() <= ref.face_count();

@@ -555,16 +555,15 @@ class MortonBuilder {
   // node's child index moves by cursor - 1.
   NodeList build_side_by_side(uint32_t n) const {
     struct Top {
-      uint32_t begin, end;
-      uint32_t left = kNone, right = kNone;  // top nodes (inner), or
-      uint32_t task = kNone;                 // the task building this range
+      uint32_t left = kNone, right = kNone;  // its children among the top nodes (an inner node), or
+      uint32_t task = kNone;                 // the task building its range
     };
     const uint32_t grain = std::max(kParallelMin, uint32_t(n / (8 * size_t(parts_))));
     std::vector<Top> top;
     std::vector<std::pair<uint32_t, uint32_t>> tasks;  // ranges, in depth-first order
     auto split_top = [&](auto& self, uint32_t begin, uint32_t end) -> uint32_t {
       const uint32_t id = uint32_t(top.size());
-      top.push_back({begin, end});
+      top.push_back({});
       if (end - begin <= grain) {
         top[id].task = uint32_t(tasks.size());
         tasks.push_back({begin, end});
