@@ -57,7 +57,7 @@ inline constexpr uint32_t kMaxFlipAnchors = 32;
 
 /// Meshing passes at most: a pass whose regions still give flipped triangles splits them
 /// (MeshingFix::split_curved) and is followed by another. On the libcgal-demo meshes at 10
-/// proxies they end with none after 5-30 passes (bench/RESULTS.md, thirty-fifth session).
+/// proxies nearly all end with none within 30 passes (bench/RESULTS.md, thirty-fifth session).
 inline constexpr uint32_t kMaxSplitPasses = 32;
 
 /// Default chord error for ChordRule::paper. Chosen on fandisk with 32 proxies so that the output
