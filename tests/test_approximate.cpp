@@ -633,7 +633,7 @@ TEST_CASE("approximate: few proxies on a curved scan: regions are split until no
   // once they know which regions to split (approximate.cpp, curved_without_deferred); the last
   // pass is meshed in full. The output must be closed, manifold, one polygon per region, with no
   // triangle facing away from its region (with at most 4 passes, as until the thirty-fifth
-  // session, 12, 9 and 6 of them did).
+  // session, 12, 9 and 6 triangles faced away).
   const Mesh m = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
   const Topology t = build_topology(m);
   uint32_t most_passes = 0, shortened = 0;
