@@ -581,6 +581,15 @@ class Mesher {
   std::optional<bool> perfect_triangulation(uint32_t region, const std::vector<uint32_t>& polygon) const;
   bool curved_without_deferred(const std::vector<uint32_t>& deferred, std::vector<MeshingFix>& round_fixes);
   bool diagonal_free(uint32_t a, uint32_t b) const { return !edges_.contains(edge_key(a, b)); }
+  // edges_ = the polygons' edges (the chords) only, as a try of a round starts.
+  void chords_only() {
+    edges_.clear();
+    for (uint32_t r = 0; r < regions_; ++r) {
+      const uint32_t first = polygon_offsets_[r], count = polygon_offsets_[r + 1] - first;
+      for (uint32_t i = 0; i < count; ++i)
+        edges_.insert(edge_key(polygon_vertices_[first + i], polygon_vertices_[first + (i + 1) % count]));
+    }
+  }
   void finish();
 
   const Mesh& mesh_;
@@ -1447,12 +1456,7 @@ bool Mesher::curved_without_deferred(const std::vector<uint32_t>& deferred, std:
   bool curved = std::any_of(round_fixes.begin(), round_fixes.end(),
                             [](const MeshingFix& f) { return f.kind == MeshingFix::flipped_triangles; });
   std::vector<MeshingFix> found;
-  edges_.clear();
-  for (uint32_t r = 0; r < regions_; ++r) {
-    const uint32_t first = polygon_offsets_[r], count = polygon_offsets_[r + 1] - first;
-    for (uint32_t i = 0; i < count; ++i)
-      edges_.insert(edge_key(polygon_vertices_[first + i], polygon_vertices_[first + (i + 1) % count]));
-  }
+  chords_only();
   std::vector<uint32_t> polygon;
   size_t t = 0, next = 0;  // the next triangle of the try, the next region left out
   for (uint32_t r = 0; r < regions_; ++r) {
@@ -1535,12 +1539,7 @@ bool Mesher::triangulate(bool last_round) {
   for (int attempt = 0;; ++attempt) {
     const bool defer = attempt == 0 && !last_round;
     // Each try starts from the polygons' edges (the chords); each region it accepts adds its diagonals.
-    edges_.clear();
-    for (uint32_t r = 0; r < regions_; ++r) {
-      const uint32_t first = polygon_offsets_[r], count = polygon_offsets_[r + 1] - first;
-      for (uint32_t i = 0; i < count; ++i)
-        edges_.insert(edge_key(polygon_vertices_[first + i], polygon_vertices_[first + (i + 1) % count]));
-    }
+    chords_only();
     out_.stats.chords = uint32_t(edges_.size());
     triangles_.clear();
     triangle_regions_.clear();
