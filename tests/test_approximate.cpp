@@ -659,6 +659,97 @@ TEST_CASE("approximate: few proxies on a curved scan: regions are split until no
   CHECK(shortened > 0);
 }
 
+TEST_CASE("split by normals: a noisy curved region by its curvature, a flat one in space, a CAD one at its sharp edge") {
+  // The split the meshing makes of a region too curved for one polygon (approximate.cpp,
+  // split_by_normals). On a scan the faces with the most extreme normals are noise: a split
+  // seeded there kept a handful of faces in one half (the man at 10 proxies: 8 + 5245, ...).
+  // Here half a cylinder's side, its vertices moved in and out by up to 4% of the radius: it must
+  // come apart into two quarters, about half the faces each, each on its own side of the middle.
+  {
+    const double pi = 3.14159265358979323846;
+    Mesh m = prism(regular_polygon(96, 1.0), 1.0, 2, 24);
+    std::vector<uint32_t> labels(m.face_count());
+    std::vector<double> angle(m.face_count(), -1);  // of a side face of region 0, in (0, pi)
+    for (size_t f = 0; f < m.face_count(); ++f) {
+      double c[3] = {0, 0, 0};
+      for (int j = 0; j < 3; ++j)
+        for (int k = 0; k < 3; ++k) c[k] += m.positions[3 * m.indices[3 * f + j] + k] / 3;
+      const auto n = unit_normal(m, f);
+      const double a = std::atan2(c[1], c[0]);
+      const bool side = std::abs(n[2]) < 0.5;
+      labels[f] = side && a > 0 ? 0 : 1;
+      if (labels[f] == 0) angle[f] = a;
+    }
+    // (The noise after the labels: the region is the half side, whatever its faces' normals.)
+    uint32_t state = 12345;  // a fixed LCG: the same mesh every run
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+      state = state * 1664525u + 1013904223u;
+      const float scale = float(1 + 0.04 * (double(state >> 8) / double(1u << 24) * 2 - 1));
+      m.positions[3 * v] *= scale, m.positions[3 * v + 1] *= scale;
+    }
+    const Topology t = build_topology(m);
+    const uint32_t count = detail::split_regions_by_normals(m, t, labels, 2, {0});
+    CHECK(count == 3);
+    size_t in[2] = {0, 0}, wrong_side[2] = {0, 0};  // faces of each half; those past the middle
+    for (size_t f = 0; f < m.face_count(); ++f) {
+      if (angle[f] < 0) continue;
+      REQUIRE((labels[f] == 0 || labels[f] == 2));
+      const int half = labels[f] == 0 ? 0 : 1;
+      ++in[half];
+      wrong_side[half] += angle[f] < pi / 2;
+    }
+    CAPTURE(in[0]);
+    CAPTURE(in[1]);
+    CHECK(3 * std::min(in[0], in[1]) >= in[0] + in[1]);  // a third of the faces or more each
+    // Each half lies on one side of the middle but for a few faces along the cut.
+    const size_t stray = std::min(wrong_side[0] + (in[1] - wrong_side[1]), wrong_side[1] + (in[0] - wrong_side[0]));
+    CAPTURE(stray);
+    CHECK(10 * stray <= in[0] + in[1]);
+  }
+  // A flat region (found curved where its polygon folds) has one normal: every distance in the
+  // flood ties, and the ties are what splits it. They go to the face offered first, breadth first
+  // from the seeds, so it comes apart in space: two parts of about equal size.
+  {
+    const Mesh m = cube(8);
+    const Topology t = build_topology(m);
+    std::vector<uint32_t> labels(m.face_count());
+    size_t flat = 0;
+    for (size_t f = 0; f < m.face_count(); ++f) {
+      labels[f] = unit_normal(m, f)[2] > 0.999 ? 0 : 1;
+      flat += labels[f] == 0;
+    }
+    REQUIRE(flat == 128);
+    CHECK(detail::split_regions_by_normals(m, t, labels, 2, {0}) == 3);
+    const size_t kept = size_t(std::count(labels.begin(), labels.end(), 0u));
+    const size_t fresh = size_t(std::count(labels.begin(), labels.end(), 2u));
+    CAPTURE(kept);
+    CAPTURE(fresh);
+    CHECK(kept + fresh == flat);
+    CHECK(3 * std::min(kept, fresh) >= flat);
+  }
+  // On a CAD part the far side of a sharp edge is where the split belongs: two sides of the
+  // chamfered box as one region (its top, 2 x 1, and the chamfer) come apart along their edge.
+  {
+    const Mesh m = prism(kChamferedSection, 1.0, 4, 4);
+    const Topology t = build_topology(m);
+    const double chamfer[3] = {0.7071067811865476, 0.7071067811865476, 0};
+    std::vector<uint32_t> labels(m.face_count());
+    std::vector<uint8_t> side(m.face_count(), 0);  // 1: top (+y), 2: chamfer
+    for (size_t f = 0; f < m.face_count(); ++f) {
+      const auto n = unit_normal(m, f);
+      side[f] = n[1] > 0.999 ? 1 : n[0] * chamfer[0] + n[1] * chamfer[1] > 0.999 ? 2 : 0;
+      labels[f] = side[f] != 0 ? 0 : 1;
+    }
+    const uint32_t count = detail::split_regions_by_normals(m, t, labels, 2, {0});
+    CHECK(count == 3);
+    std::set<std::pair<uint8_t, uint32_t>> pairs;  // (side, label) over the region's faces
+    for (size_t f = 0; f < m.face_count(); ++f)
+      if (side[f] != 0) pairs.insert({side[f], labels[f]});
+    CHECK(pairs.size() == 2);  // each side one label, and the two labels differ
+    if (pairs.size() == 2) CHECK(pairs.begin()->second != std::next(pairs.begin())->second);
+  }
+}
+
 TEST_CASE("mesh_partition: regions meeting only at two poles get a third anchor") {
   // Four orange slices of a sphere: every border runs from pole to pole, all four chords join the
   // same two anchors and each slice has only those two.

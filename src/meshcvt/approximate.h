@@ -269,6 +269,15 @@ namespace detail {
 ShapeApproximation mesh_partition_from_scratch(const Mesh& mesh, const Topology& topology,
                                                const std::vector<uint32_t>& labels, uint32_t regions,
                                                const MeshingOptions& options = {});
+
+/// The meshing's split of a region too curved for one polygon (split_by_normals in
+/// approximate.cpp), for tests: each region listed in `split` that has two faces or more (faces
+/// with a repeated corner aside) is split in two connected halves by its faces' normals. The first
+/// half keeps the region's label, the second gets the next new label (`regions`, `regions` + 1, ...
+/// in the order of the region ids). Returns the new region count. Throws OptionError as
+/// mesh_partition does for bad labels, and for a listed region >= regions.
+uint32_t split_regions_by_normals(const Mesh& mesh, const Topology& topology, std::vector<uint32_t>& labels,
+                                  uint32_t regions, const std::vector<uint32_t>& split);
 }  // namespace detail
 
 /// L2,1 distortion E = sum_k |n_k - N_i|^2 |T_k| of a labeling (N_i: normalized area-weighted mean
