@@ -2065,39 +2065,55 @@ uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const
   // A face offered to a half: the distance of its normal to the half's (squared), the order of the
   // offers (ties go to the earlier: breadth first, so a flat region comes apart in space), the face
   // and the half (bit 31: the fresh one). 16 bytes: the heap holds a few entries per face.
+  // Each member's edge neighbours in its region, as members (kNone: none there).
+  std::vector<uint32_t> adjacent(3 * m);
+  for (size_t i = 0; i < m; ++i)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t o = topology.face_adjacent[3 * size_t(members[i]) + k];
+      adjacent[3 * i + k] = o != kNone && labels[o] == labels[members[i]] ? slot[o] : kNone;
+    }
   struct Entry {
     double d;
-    uint32_t order, face_half;
+    uint32_t order, member_half;
     bool operator>(const Entry& o) const { return d != o.d ? d > o.d : order > o.order; }
   };
   constexpr uint32_t kFreshHalf = 1u << 31;
-  assert(labels.size() < kFreshHalf);
+  assert(m < kFreshHalf);
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
-  std::vector<uint32_t> grown(labels.size(), kNone);  // the label a member takes, per face
   std::vector<uint32_t> seed(count, kNone);
   std::vector<Vec3> seed_normal(count);
+  // Per member, the halves that were offered it (bit 0: the kept label's, bit 1: the fresh one's):
+  // a half offers a face once, its distance being the same from every neighbour, and a later
+  // offer (a later order) would only be popped after the first and passed over.
+  std::vector<uint8_t> offered(m);
   // One split by the normals `n` (per member): seeds, then the flood, into `out` (per member).
   auto grow = [&](const std::vector<Vec3>& n, std::vector<uint32_t>& out) {
-    for (uint32_t f : members) grown[f] = kNone;
+    out.assign(m, kNone);
+    std::fill(offered.begin(), offered.end(), uint8_t(0));
     uint32_t order = 0;
     for (uint32_t r = 0; r < regions; ++r)
-      if (fresh_of[r] != kNone) heap.push({0, order++, seed[r]}), heap.push({0, order++, seed[fresh_of[r]] | kFreshHalf});
+      if (fresh_of[r] != kNone) {
+        const uint32_t a = slot[seed[r]], b = slot[seed[fresh_of[r]]];
+        heap.push({0, order++, a}), heap.push({0, order++, b | kFreshHalf});
+        offered[a] |= 1, offered[b] |= 2;
+      }
     while (!heap.empty()) {
       const Entry e = heap.top();
       heap.pop();
-      const uint32_t face = e.face_half & ~kFreshHalf, r = labels[face];
-      if (grown[face] != kNone) continue;
-      const uint32_t half = e.face_half & kFreshHalf ? fresh_of[r] : r;
-      grown[face] = half;
+      const uint32_t i = e.member_half & ~kFreshHalf;
+      if (out[i] != kNone) continue;
+      const uint32_t r = labels[members[i]], fresh = e.member_half & kFreshHalf;
+      const uint32_t half = fresh ? fresh_of[r] : r;
+      const uint8_t bit = fresh ? 2 : 1;
+      out[i] = half;
       for (int k = 0; k < 3; ++k) {
-        const uint32_t o = topology.face_adjacent[3 * size_t(face) + k];
-        if (o == kNone || grown[o] != kNone || labels[o] != r || slot[o] == kNone) continue;
-        const Vec3 d = n[slot[o]] - seed_normal[half];
-        heap.push({dot(d, d), order++, o | (e.face_half & kFreshHalf)});
+        const uint32_t o = adjacent[3 * i + k];
+        if (o == kNone || out[o] != kNone || (offered[o] & bit)) continue;
+        offered[o] |= bit;
+        const Vec3 d = n[o] - seed_normal[half];
+        heap.push({dot(d, d), order++, o | fresh});
       }
     }
-    out.resize(m);
-    for (size_t i = 0; i < m; ++i) out[i] = grown[members[i]];
   };
   // The first seeds by the normals n: the member farthest from the proxy normal, the member
   // farthest from that one (ties: the first in face order).
@@ -2153,11 +2169,10 @@ uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const
   std::vector<Vec3> smooth = own, next(m);
   for (int round = 0; round < kSplitSmoothing; ++round) {
     for (size_t i = 0; i < m; ++i) {
-      const uint32_t f = members[i];
-      Vec3 sum = g.area[f] * smooth[i];
+      Vec3 sum = g.area[members[i]] * smooth[i];
       for (int k = 0; k < 3; ++k) {
-        const uint32_t o = topology.face_adjacent[3 * size_t(f) + k];
-        if (o != kNone && labels[o] == labels[f] && slot[o] != kNone) sum = sum + g.area[o] * smooth[slot[o]];
+        const uint32_t o = adjacent[3 * i + k];
+        if (o != kNone) sum = sum + g.area[members[o]] * smooth[o];
       }
       const double l = length(sum);
       next[i] = l > 0 ? (1.0 / l) * sum : smooth[i];
