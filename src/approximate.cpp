@@ -2037,7 +2037,7 @@ constexpr double kSplitOwnShare = 0.9;
 //   * by normals smoothed over the region (kSplitSmoothing rounds of area-weighted means over each
 //     face and its edge neighbours), seeded the same way and then moved to the means of the
 //     halves (kSplitRounds rounds of 2-means). Why: on a scan the normals are noisy, the farthest
-//     faces are noise, and a flood by noisy normals cannot reach the faces nearest its seed's
+//     faces are noise, and a flood by noisy normals does not reach the faces nearest its seed's
 //     normal, which lie scattered: the first split kept a handful of faces in one half (the man at
 //     10 proxies: 8 + 5245, 2 + 5243 ...), so large regions lost a few faces per meshing pass.
 // The distortion is measured with the faces' own normals, about each half's mean. Ties in a flood

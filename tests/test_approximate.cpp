@@ -706,8 +706,8 @@ TEST_CASE("split by normals: a noisy curved region by its curvature, a flat one 
     CAPTURE(stray);
     CHECK(10 * stray <= in[0] + in[1]);
   }
-  // A flat region (found curved where its polygon folds) has one normal: every distance in the
-  // flood ties, and the ties are what splits it. They go to the face offered first, breadth first
+  // A flat region has one normal: every distance in the flood ties, and the ties are what split
+  // it. They go to the face offered first, breadth first
   // from the seeds, so it comes apart in space: two parts of about equal size.
   {
     const Mesh m = cube(8);
@@ -728,7 +728,7 @@ TEST_CASE("split by normals: a noisy curved region by its curvature, a flat one 
     CHECK(3 * std::min(kept, fresh) >= flat);
   }
   // On a CAD part the far side of a sharp edge is where the split belongs: two sides of the
-  // chamfered box as one region (its top, 2 x 1, and the chamfer) come apart along their edge.
+  // chamfered box as one region (its face at y = 1 and the chamfer) come apart along their edge.
   {
     const Mesh m = prism(kChamferedSection, 1.0, 4, 4);
     const Topology t = build_topology(m);
