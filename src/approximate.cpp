@@ -2044,7 +2044,7 @@ constexpr double kSplitOwnShare = 0.9;
 // (equal distances: a flat region) go to the face offered first.
 uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const Proxies& proxies,
                           std::vector<uint32_t>& labels, uint32_t regions, const std::vector<uint32_t>& split,
-                          MeshingFix::Kind kind, std::vector<MeshingFix>& fixes) {
+                          MeshingFix::Kind kind, std::vector<MeshingFix>& fixes, WorkerPool* pool = nullptr) {
   std::vector<uint8_t> wanted(regions, 0);
   for (uint32_t r : split) wanted[r] = 1;
   // The wanted regions' faces (members, in face order) and where each is among them (slot).
@@ -2061,6 +2061,33 @@ uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const
       fresh_of[r] = count++;
       fixes.push_back({kind, r, fresh_of[r], kNone, 1});
     }
+  // The floods of different regions never meet: they run side by side, the split regions dealt to
+  // the pool's threads largest first, each to the thread with the fewest faces so far (a region's
+  // own pushes and pops keep their order, so the halves do not depend on the thread count).
+  const unsigned parts = pool != nullptr ? pool->size() : 1;
+  std::vector<std::vector<uint32_t>> part_regions(parts);
+  {
+    std::vector<uint32_t> by_size;
+    for (uint32_t r = 0; r < regions; ++r)
+      if (fresh_of[r] != kNone) by_size.push_back(r);
+    std::stable_sort(by_size.begin(), by_size.end(), [&](uint32_t a, uint32_t b) { return size[a] > size[b]; });
+    std::vector<size_t> load(parts, 0);
+    for (uint32_t r : by_size) {
+      const size_t p = size_t(std::min_element(load.begin(), load.end()) - load.begin());
+      part_regions[p].push_back(r);
+      load[p] += size[r];
+    }
+  }
+  auto each_region = [&](const auto& fn) {
+    if (parts == 1) {
+      for (uint32_t r : part_regions[0]) fn(r);
+      return;
+    }
+    pool->run(parts, [&](size_t first, size_t last, unsigned) {
+      for (size_t p = first; p < last; ++p)
+        for (uint32_t r : part_regions[p]) fn(r);
+    }, 1);
+  };
 
   // A face offered to a half: the distance of its normal to the half's (squared), the order of the
   // offers (ties go to the earlier: breadth first, so a flat region comes apart in space), the face
@@ -2079,7 +2106,6 @@ uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const
   };
   constexpr uint32_t kFreshHalf = 1u << 31;
   assert(m < kFreshHalf);
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
   std::vector<uint32_t> seed(count, kNone);
   std::vector<Vec3> seed_normal(count);
   // Per member, the halves that were offered it (bit 0: the kept label's, bit 1: the fresh one's):
@@ -2090,30 +2116,30 @@ uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const
   auto grow = [&](const std::vector<Vec3>& n, std::vector<uint32_t>& out) {
     out.assign(m, kNone);
     std::fill(offered.begin(), offered.end(), uint8_t(0));
-    uint32_t order = 0;
-    for (uint32_t r = 0; r < regions; ++r)
-      if (fresh_of[r] != kNone) {
-        const uint32_t a = slot[seed[r]], b = slot[seed[fresh_of[r]]];
-        heap.push({0, order++, a}), heap.push({0, order++, b | kFreshHalf});
-        offered[a] |= 1, offered[b] |= 2;
+    each_region([&](uint32_t r) {  // (writes only r's members and reads only theirs)
+      std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
+      uint32_t order = 0;
+      const uint32_t a = slot[seed[r]], b = slot[seed[fresh_of[r]]];
+      heap.push({0, order++, a}), heap.push({0, order++, b | kFreshHalf});
+      offered[a] |= 1, offered[b] |= 2;
+      while (!heap.empty()) {
+        const Entry e = heap.top();
+        heap.pop();
+        const uint32_t i = e.member_half & ~kFreshHalf;
+        if (out[i] != kNone) continue;
+        const uint32_t fresh = e.member_half & kFreshHalf;
+        const uint32_t half = fresh ? fresh_of[r] : r;
+        const uint8_t bit = fresh ? 2 : 1;
+        out[i] = half;
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t o = adjacent[3 * i + k];
+          if (o == kNone || out[o] != kNone || (offered[o] & bit)) continue;
+          offered[o] |= bit;
+          const Vec3 d = n[o] - seed_normal[half];
+          heap.push({dot(d, d), order++, o | fresh});
+        }
       }
-    while (!heap.empty()) {
-      const Entry e = heap.top();
-      heap.pop();
-      const uint32_t i = e.member_half & ~kFreshHalf;
-      if (out[i] != kNone) continue;
-      const uint32_t r = labels[members[i]], fresh = e.member_half & kFreshHalf;
-      const uint32_t half = fresh ? fresh_of[r] : r;
-      const uint8_t bit = fresh ? 2 : 1;
-      out[i] = half;
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t o = adjacent[3 * i + k];
-        if (o == kNone || out[o] != kNone || (offered[o] & bit)) continue;
-        offered[o] |= bit;
-        const Vec3 d = n[o] - seed_normal[half];
-        heap.push({dot(d, d), order++, o | fresh});
-      }
-    }
+    });
   };
   // The first seeds by the normals n: the member farthest from the proxy normal, the member
   // farthest from that one (ties: the first in face order).
@@ -2168,15 +2194,19 @@ uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const
   // By smoothed normals, with rounds of 2-means.
   std::vector<Vec3> smooth = own, next(m);
   for (int round = 0; round < kSplitSmoothing; ++round) {
-    for (size_t i = 0; i < m; ++i) {
-      Vec3 sum = g.area[members[i]] * smooth[i];
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t o = adjacent[3 * i + k];
-        if (o != kNone) sum = sum + g.area[members[o]] * smooth[o];
+    auto smooth_range = [&](size_t first, size_t last, unsigned) {
+      for (size_t i = first; i < last; ++i) {
+        Vec3 sum = g.area[members[i]] * smooth[i];
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t o = adjacent[3 * i + k];
+          if (o != kNone) sum = sum + g.area[members[o]] * smooth[o];
+        }
+        const double l = length(sum);
+        next[i] = l > 0 ? (1.0 / l) * sum : smooth[i];
       }
-      const double l = length(sum);
-      next[i] = l > 0 ? (1.0 / l) * sum : smooth[i];
-    }
+    };
+    if (pool != nullptr) pool->run(m, smooth_range);
+    else smooth_range(0, m, 0);
     smooth.swap(next);
   }
   seed_far(smooth);
@@ -2311,7 +2341,8 @@ ShapeApproximation mesh_partition_with(const Mesh& mesh, const Topology& topolog
     }
     shortened += !mesher.complete();
     const uint32_t before = count;
-    count = split_by_normals(topology, geom, proxies, labels, count, curved, MeshingFix::split_curved, partition_fixes);
+    count = split_by_normals(topology, geom, proxies, labels, count, curved, MeshingFix::split_curved, partition_fixes,
+                             &pool);
     std::vector<uint8_t> changed(count, 0);  // the split regions and their new halves
     for (uint32_t r : curved) changed[r] = 1;
     std::fill(changed.begin() + before, changed.end(), uint8_t(1));

@@ -398,6 +398,19 @@ TEST_CASE("approximate: the result does not depend on the thread count") {
     CHECK(x.mesh.indices == z.mesh.indices);
     check_closed_manifold(y);
   }
+  // The scanned elephant at 4 proxies: its curved regions are split several at a time, their
+  // floods side by side on the pool's threads (approximate.cpp, split_by_normals).
+  const Mesh e = read_mesh(std::string(MESHCVT_TEST_DATA) + "/elephant.off");
+  ApproximateOptions a = with_proxies(4), b = with_proxies(4), c = with_proxies(4);
+  a.threads = 1;
+  b.threads = 2;
+  c.threads = 3;
+  const ShapeApproximation x = approximate_shape(e, a), y = approximate_shape(e, b), z = approximate_shape(e, c);
+  CHECK(has_fix(x, MeshingFix::split_curved));
+  CHECK(x.labels == y.labels);
+  CHECK(x.labels == z.labels);
+  CHECK(x.mesh.positions == y.mesh.positions);
+  CHECK(x.mesh.indices == z.mesh.indices);
 }
 
 // Approximations of a scanned elephant (tests/data) with 12, 30 and 60 proxies: many of their
