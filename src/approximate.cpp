@@ -2089,9 +2089,6 @@ uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const
     }, 1);
   };
 
-  // A face offered to a half: the distance of its normal to the half's (squared), the order of the
-  // offers (ties go to the earlier: breadth first, so a flat region comes apart in space), the face
-  // and the half (bit 31: the fresh one). 16 bytes: the heap holds a few entries per face.
   // Each member's edge neighbours in its region, as members (kNone: none there).
   std::vector<uint32_t> adjacent(3 * m);
   for (size_t i = 0; i < m; ++i)
@@ -2099,6 +2096,9 @@ uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const
       const uint32_t o = topology.face_adjacent[3 * size_t(members[i]) + k];
       adjacent[3 * i + k] = o != kNone && labels[o] == labels[members[i]] ? slot[o] : kNone;
     }
+  // A face offered to a half: the distance of its normal to the half's (squared), the order of the
+  // offers (ties go to the earlier: breadth first, so a flat region comes apart in space), the
+  // member and the half (bit 31: the fresh one). 16 bytes: the heap holds a few entries per face.
   struct Entry {
     double d;
     uint32_t order, member_half;
@@ -2106,7 +2106,7 @@ uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const
   };
   constexpr uint32_t kFreshHalf = 1u << 31;
   assert(m < kFreshHalf);
-  std::vector<uint32_t> seed(count, kNone);
+  std::vector<uint32_t> seed(count, kNone);  // per half, a member
   std::vector<Vec3> seed_normal(count);
   // Per member, the halves that were offered it (bit 0: the kept label's, bit 1: the fresh one's):
   // a half offers a face once, its distance being the same from every neighbour, and a later
@@ -2119,7 +2119,7 @@ uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const
     each_region([&](uint32_t r) {  // (writes only r's members and reads only theirs)
       std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
       uint32_t order = 0;
-      const uint32_t a = slot[seed[r]], b = slot[seed[fresh_of[r]]];
+      const uint32_t a = seed[r], b = seed[fresh_of[r]];
       heap.push({0, order++, a}), heap.push({0, order++, b | kFreshHalf});
       offered[a] |= 1, offered[b] |= 2;
       while (!heap.empty()) {
@@ -2148,18 +2148,18 @@ uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const
     for (size_t i = 0; i < m; ++i) {
       const uint32_t r = labels[members[i]];
       const double c = dot(n[i], proxies.normal[r]);
-      if (fresh_of[r] != kNone && c < far[r]) far[r] = c, seed[r] = members[i];
+      if (fresh_of[r] != kNone && c < far[r]) far[r] = c, seed[r] = uint32_t(i);
     }
     std::fill(far.begin(), far.end(), 2.0);
     for (size_t i = 0; i < m; ++i) {
       const uint32_t r = labels[members[i]];
-      if (fresh_of[r] == kNone || members[i] == seed[r]) continue;
-      const double c = dot(n[i], n[slot[seed[r]]]);
-      if (c < far[r]) far[r] = c, seed[fresh_of[r]] = members[i];
+      if (fresh_of[r] == kNone || i == seed[r]) continue;
+      const double c = dot(n[i], n[seed[r]]);
+      if (c < far[r]) far[r] = c, seed[fresh_of[r]] = uint32_t(i);
     }
     for (uint32_t r = 0; r < regions; ++r)
       if (fresh_of[r] != kNone)
-        seed_normal[r] = n[slot[seed[r]]], seed_normal[fresh_of[r]] = n[slot[seed[fresh_of[r]]]];
+        seed_normal[r] = n[seed[r]], seed_normal[fresh_of[r]] = n[seed[fresh_of[r]]];
   };
   // Per half of `halves` (labels per member): the area-weighted mean of the normals n, unit (zero
   // where it has none).
@@ -2218,7 +2218,7 @@ uint32_t split_by_normals(const Topology& topology, const FaceGeometry& g, const
       const uint32_t l = by_smooth[i];
       if (l == kNone || !(dot(mean[l], mean[l]) > 0)) continue;  // (no area: the seed stays)
       const double c = dot(smooth[i], mean[l]);
-      if (c > nearest[l]) nearest[l] = c, seed[l] = members[i];
+      if (c > nearest[l]) nearest[l] = c, seed[l] = uint32_t(i);
     }
     for (uint32_t l = 0; l < count; ++l)
       if (dot(mean[l], mean[l]) > 0) seed_normal[l] = mean[l];
