@@ -338,6 +338,168 @@ static std::vector<uint32_t> weld_representatives(const std::vector<float>& posi
   return representative;
 }
 
+// Welding undone where it breaks a manifold. Two vertices at one position are usually one vertex
+// written twice (split normals or UVs, STL), and welding zips the surface together there. But a
+// surface that touches itself may have two vertices at one position on purpose: diplodocus (libcgal-
+// demo) is a closed genus-0 manifold in its file whose two pairs of coincident vertices each have
+// an edge to a common neighbour. Welding made each such pair of edges one edge of four faces, and
+// coarsening the non-manifold result left defects and thin triangles (diplodocus -> 6851: 2 defects,
+// 120 angles below 30 degrees; none of either with --no-weld). So where an edge of the welded mesh
+// has three or more faces and each of the file's edges that made it has exactly two faces, using
+// it in opposite directions (a manifold edge in the file), the vertices at each end of those file
+// edges are kept apart again: one keeps the shared vertex, the others their own. Not where a vertex
+// to be kept apart also zips two of the file's edges into one elsewhere (a seam that welding
+// closes): the seam matters more; nor where one of the faces at the edge collapses (see below).
+// Returns the number of vertices kept apart; `representative` and `welded` are updated. Cost: the
+// reading of a 1.2M-face mesh with 11% of its vertices written twice (seams) 92 -> 120 ms; none
+// where nothing was welded.
+static uint64_t keep_manifold_edges_apart(const std::vector<uint32_t>& indices, std::vector<uint32_t>& representative,
+                                          uint64_t& welded) {
+  const size_t vertex_count = representative.size();
+  // Welded groups of two or more file vertices (CSR by representative), and the faces at their
+  // members (CSR by vertex). Only a file edge with two faces can be kept apart, so both its ends
+  // are used twice or more: STL (three vertices of its own per facet) stops at the first check.
+  std::vector<uint32_t> group_offsets, members, face_offsets, vertex_faces;
+  auto build_groups = [&] {
+    group_offsets.assign(vertex_count + 1, 0);
+    for (size_t v = 0; v < vertex_count; ++v) ++group_offsets[representative[v] + 1];
+    for (size_t v = 0; v < vertex_count; ++v) group_offsets[v + 1] += group_offsets[v];
+    members.resize(vertex_count);
+    std::vector<uint32_t> fill(group_offsets.begin(), group_offsets.end() - 1);
+    for (size_t v = 0; v < vertex_count; ++v) members[fill[representative[v]]++] = uint32_t(v);
+  };
+  build_groups();
+  std::vector<uint8_t> multi(vertex_count);  // v shares its position with another vertex welded to it
+  for (size_t v = 0; v < vertex_count; ++v)
+    multi[v] = group_offsets[representative[v] + 1] - group_offsets[representative[v]] > 1;
+  face_offsets.assign(vertex_count + 1, 0);
+  bool shared = false;
+  for (uint32_t v : indices)
+    if (multi[v]) shared |= ++face_offsets[v + 1] > 1;
+  if (!shared) return 0;
+  for (size_t v = 0; v < vertex_count; ++v) face_offsets[v + 1] += face_offsets[v];
+  vertex_faces.resize(face_offsets.back());
+  {
+    std::vector<uint32_t> fill(face_offsets.begin(), face_offsets.end() - 1);
+    for (size_t i = 0; i < indices.size(); ++i)
+      if (multi[indices[i]]) vertex_faces[fill[indices[i]]++] = uint32_t(i / 3);
+  }
+  // One face's edge at a member of the group being looked at, toward a vertex of another group.
+  struct Incidence {
+    uint32_t other_group;  // the representative at the edge's other end
+    uint32_t a, b;         // the file's edge, in the face's direction (one of them the member)
+    bool collapses;        // the face has two corners welded into one
+    uint64_t file_key() const { return uint64_t(std::min(a, b)) << 32 | std::max(a, b); }
+  };
+  std::vector<Incidence> at, candidates;  // candidates: runs of `at`, kept whole
+  std::vector<uint32_t> candidate_offsets, ends, separate;
+  std::vector<uint8_t> zips(vertex_count, 0), apart(vertex_count, 0);
+  // Whether some welded edge at group g has three or more faces: counted per neighbouring group
+  // without sorting (the files that get here are mostly seams that welding zips, every edge of
+  // two faces: a 1.2M-face mesh whose every vertex was written twice read in 0.15 s, 0.6 s with
+  // the sort below for every group).
+  std::vector<uint32_t> count(vertex_count, 0), touched;
+  auto heavy_edge_at = [&](uint32_t g) {
+    bool heavy = false;
+    touched.clear();
+    for (uint32_t i = group_offsets[g]; i < group_offsets[g + 1]; ++i)
+      for (uint32_t j = face_offsets[members[i]]; j < face_offsets[members[i] + 1]; ++j) {
+        const uint32_t* c = &indices[3 * size_t(vertex_faces[j])];
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t x = representative[c[k]];
+          if (x == g) continue;
+          if (count[x]++ == 0) touched.push_back(x);
+          heavy |= count[x] >= 3;  // (a face at two members of g counts twice: checked below)
+        }
+      }
+    for (uint32_t x : touched) count[x] = 0;
+    return heavy;
+  };
+  uint64_t kept_apart = 0;
+  for (bool changed = true; changed;) {
+    changed = false;
+    bool any_heavy = false;
+    for (uint32_t g = 0; g < vertex_count && !any_heavy; ++g)
+      any_heavy = group_offsets[g + 1] - group_offsets[g] > 1 && heavy_edge_at(g);
+    if (!any_heavy) break;
+    std::fill(zips.begin(), zips.end(), uint8_t(0));
+    candidates.clear();
+    candidate_offsets.assign(1, 0);
+    for (uint32_t g = 0; g < vertex_count; ++g) {
+      if (group_offsets[g + 1] - group_offsets[g] < 2) continue;
+      at.clear();
+      for (uint32_t i = group_offsets[g]; i < group_offsets[g + 1]; ++i) {
+        const uint32_t m = members[i];
+        for (uint32_t j = face_offsets[m]; j < face_offsets[m + 1]; ++j) {
+          if (j > face_offsets[m] && vertex_faces[j] == vertex_faces[j - 1]) continue;  // m twice in a face
+          const uint32_t* c = &indices[3 * size_t(vertex_faces[j])];
+          const uint32_t r[3] = {representative[c[0]], representative[c[1]], representative[c[2]]};
+          const bool collapses = r[0] == r[1] || r[1] == r[2] || r[0] == r[2];
+          const int k = c[0] == m ? 0 : c[1] == m ? 1 : 2;
+          const int next = (k + 1) % 3, previous = (k + 2) % 3;
+          if (r[next] != g) at.push_back({r[next], m, c[next], collapses});
+          if (r[previous] != g) at.push_back({r[previous], c[previous], m, collapses});
+        }
+      }
+      std::sort(at.begin(), at.end(), [](const Incidence& x, const Incidence& y) {
+        return x.other_group != y.other_group ? x.other_group < y.other_group : x.file_key() < y.file_key();
+      });
+      for (size_t i = 0, last = 0; i < at.size(); i = last) {
+        last = i;
+        while (last < at.size() && at[last].other_group == at[i].other_group) ++last;
+        // Two faces from two file edges: welding zipped them (a seam). Its members at this end.
+        if (last - i == 2 && at[i].file_key() != at[i + 1].file_key()) {
+          for (size_t j = i; j < last; ++j) zips[representative[at[j].a] == g ? at[j].a : at[j].b] = 1;
+          continue;
+        }
+        // Three or more faces, none collapsing (a face the weld collapses is left out later, and
+        // its neighbours then share the edge: welding removed a sliver there), each of the file's
+        // edges with two faces in opposite directions. Seen from both ends: taken at the lower.
+        const uint32_t x = at[i].other_group;
+        if (last - i < 3 || (group_offsets[x + 1] - group_offsets[x] > 1 && x < g)) continue;
+        bool manifold_in_file = true;
+        for (size_t j = i; j < last && manifold_in_file; j += 2)
+          manifold_in_file = !at[j].collapses && j + 1 < last && !at[j + 1].collapses &&
+                             at[j + 1].file_key() == at[j].file_key() && at[j + 1].a == at[j].b &&
+                             (j + 2 == last || at[j + 2].file_key() != at[j].file_key());
+        if (!manifold_in_file) continue;
+        candidates.insert(candidates.end(), at.begin() + i, at.begin() + last);
+        candidate_offsets.push_back(uint32_t(candidates.size()));
+      }
+    }
+    // At each end of a candidate edge, the file's vertices there: all but one (the shared vertex
+    // itself when it is among them, else the lowest) are kept apart, unless one of those zips a seam.
+    for (size_t c = 0; c + 1 < candidate_offsets.size(); ++c) {
+      const Incidence* first = candidates.data() + candidate_offsets[c];
+      const Incidence* last = candidates.data() + candidate_offsets[c + 1];
+      separate.clear();
+      for (const uint32_t end_group : {representative[first->a], representative[first->b]}) {
+        ends.clear();
+        for (const Incidence* e = first; e != last; ++e)
+          ends.push_back(representative[e->a] == end_group ? e->a : e->b);
+        std::sort(ends.begin(), ends.end());
+        ends.erase(std::unique(ends.begin(), ends.end()), ends.end());
+        const uint32_t keep = std::binary_search(ends.begin(), ends.end(), end_group) ? end_group : ends.front();
+        for (uint32_t v : ends)
+          if (v != keep) separate.push_back(v);
+      }
+      if (std::none_of(separate.begin(), separate.end(), [&](uint32_t v) { return zips[v] != 0; }))
+        for (uint32_t v : separate) apart[v] = 1;
+    }
+    for (size_t v = 0; v < vertex_count; ++v)
+      if (apart[v]) {
+        apart[v] = 0;
+        if (representative[v] == v) continue;
+        representative[v] = uint32_t(v);
+        --welded;
+        ++kept_apart;
+        changed = true;
+      }
+    if (changed) build_groups();
+  }
+  return kept_apart;
+}
+
 // The box of the vertices the faces use, in the file's units (double): ReadStats' largest
 // coordinate and extent, and the corners for choosing an origin.
 static void referenced_box(const RawMesh& raw, double lo[3], double hi[3], ReadStats& stats) {
@@ -396,8 +558,10 @@ static Mesh finish_mesh(RawMesh&& raw, const std::array<double, 3>& origin, bool
   raw.positions = std::vector<double>();  // freed before the weld's table
   std::vector<uint32_t> new_id;  // file vertex -> output vertex (via its representative)
   uint64_t welded = 0;
+  uint64_t kept_apart = 0;
   if (weld) {
     new_id = weld_representatives(positions, welded);
+    if (welded > 0) kept_apart = keep_manifold_edges_apart(raw.indices, new_id, welded);
   } else {
     new_id.resize(vertex_count);
     for (size_t v = 0; v < vertex_count; ++v) new_id[v] = static_cast<uint32_t>(v);
@@ -442,6 +606,7 @@ static Mesh finish_mesh(RawMesh&& raw, const std::array<double, 3>& origin, bool
   mesh.indices = std::move(raw.indices);
   mesh.source_polygon = std::move(raw.source_polygon);
   stats.welded_vertices = welded;
+  stats.kept_apart_vertices = kept_apart;
   stats.unreferenced_vertices = unreferenced;
   assert(stats.welded_vertices + stats.unreferenced_vertices + kept == vertex_count);
   return mesh;

@@ -21,6 +21,7 @@
 
 #include "meshcvt/error.h"
 #include "meshcvt/io.h"
+#include "meshcvt/topology.h"
 #include "io_internal.h"
 
 namespace {
@@ -734,6 +735,72 @@ TEST_CASE("io: welding keeps first-occurrence order, merges -0.0 with 0.0, drops
   CHECK(stats.welded_vertices == 0);
   CHECK(stats.unreferenced_vertices == 2);  // v1 and v6
   CHECK(split.vertex_count() == 5);
+}
+
+// Two closed tetrahedra whose edges P0-P1 lie at the same place. `second_p1` is what the second
+// one's faces at P1 use (its vertex 5, or the duplicate 8 in some faces: a seam in the file).
+static std::string two_tetrahedra_off(bool seam) {
+  std::string off = "OFF\n" + std::string(seam ? "9" : "8") + " 8 0\n";
+  // 0-3: the first (P0, P1, apex, apex); 4-7: the second (P0, P1 again, its apexes elsewhere).
+  off += "0 0 0\n1 0 0\n0.5 1 0.2\n0.5 0.3 1\n0 0 0\n1 0 0\n0.5 -1 0.2\n0.5 -0.3 -1\n";
+  if (seam) off += "1 0 0\n";
+  off += "3 0 1 2\n3 0 3 1\n3 0 2 3\n3 1 3 2\n";  // outward, consistently oriented
+  off += seam ? "3 4 6 5\n3 4 5 7\n3 4 7 6\n3 8 6 7\n" : "3 4 6 5\n3 4 5 7\n3 4 7 6\n3 5 6 7\n";
+  return off;
+}
+
+TEST_CASE("io: welding leaves apart the vertices that would make a manifold edge of the file non-manifold") {
+  TempDir dir;
+  ReadStats stats;
+  SUBCASE("two closed parts touching along an edge stay two closed parts") {
+    const Mesh mesh = meshcvt::read_mesh(dir.write("t.off", two_tetrahedra_off(false)), {}, &stats);
+    CHECK(stats.welded_vertices == 0);
+    CHECK(stats.kept_apart_vertices == 2);
+    CHECK(mesh.vertex_count() == 8);
+    const meshcvt::Topology t = meshcvt::build_topology(mesh);
+    CHECK(t.nonmanifold_edges == 0);
+    CHECK(t.nonmanifold_vertices == 0);
+    CHECK(t.component_count == 2);
+    CHECK(t.boundary_edges == 0);
+  }
+  SUBCASE("the same as STL facets: nothing was shared in the file, so the weld stands") {
+    const Mesh tets = meshcvt::read_mesh(dir.write("t.off", two_tetrahedra_off(false)), {}, &stats);
+    std::string stl = "solid t\n";
+    for (size_t f = 0; f < tets.face_count(); ++f) {
+      stl += "facet normal 0 0 0\nouter loop\n";
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = tets.indices[3 * f + k];
+        stl += "vertex " + std::to_string(tets.positions[3 * v]) + " " + std::to_string(tets.positions[3 * v + 1]) +
+               " " + std::to_string(tets.positions[3 * v + 2]) + "\n";
+      }
+      stl += "endloop\nendfacet\n";
+    }
+    const Mesh mesh = meshcvt::read_mesh(dir.write("t.stl", stl + "endsolid t\n"), {}, &stats);
+    CHECK(stats.kept_apart_vertices == 0);
+    CHECK(mesh.vertex_count() == 6);
+    CHECK(meshcvt::build_topology(mesh).nonmanifold_edges == 1);
+  }
+  SUBCASE("a vertex the weld also needs to close a seam stays welded") {
+    const Mesh mesh = meshcvt::read_mesh(dir.write("t.off", two_tetrahedra_off(true)), {}, &stats);
+    CHECK(stats.kept_apart_vertices == 0);
+    CHECK(stats.welded_vertices == 3);
+    const meshcvt::Topology t = meshcvt::build_topology(mesh);
+    CHECK(t.boundary_edges == 0);  // the second tetrahedron's seam closed
+    CHECK(t.nonmanifold_edges == 1);
+  }
+  SUBCASE("a sliver face the weld collapses is collapsed, its neighbours joined") {
+    // A tetrahedron whose edge 0-1 was split at a point m (vertex 4) at vertex 0's position: the
+    // faces 0-m-2 and m-0-3 have no area; welding m into 0 collapses them and gives back the
+    // tetrahedron's edge 0-1 between its other two faces there.
+    const Mesh mesh = meshcvt::read_mesh(dir.write("s.off",
+                                                   "OFF\n5 6 0\n0 0 0\n1 0 0\n0.5 1 0.2\n0.5 0.3 1\n0 0 0\n"
+                                                   "3 0 4 2\n3 4 1 2\n3 1 4 3\n3 4 0 3\n3 0 2 3\n3 1 3 2\n"),
+                                         {}, &stats);
+    CHECK(stats.welded_vertices == 1);
+    CHECK(stats.kept_apart_vertices == 0);
+    const meshcvt::Topology t = meshcvt::build_topology(mesh);
+    CHECK(t.collapsed_faces == 2);
+  }
 }
 
 TEST_CASE("io: the 5.5k-face elephant reads with all its vertices and faces") {

@@ -99,6 +99,7 @@ void print_text(const InfoArgs& a, const ReadStats& rs, const MeshInfo& i, doubl
   row("file polygons", rs.file_polygons);
   row("triangulated polygons", rs.triangulated_polygons);
   row("welded vertices", a.no_weld ? std::string("0 (--no-weld)") : std::to_string(rs.welded_vertices));
+  row("kept apart (weld)", rs.kept_apart_vertices);
   row("unreferenced dropped", rs.unreferenced_vertices);
   row("skipped header lines", rs.skipped_header_lines);
   row("read ms", milliseconds(read_ms));
@@ -136,6 +137,7 @@ void print_json(const InfoArgs& a, const ReadStats& rs, const MeshInfo& i, doubl
       .value("file_polygons", rs.file_polygons)
       .value("triangulated_polygons", rs.triangulated_polygons)
       .value("welded_vertices", rs.welded_vertices)
+      .value("kept_apart_vertices", rs.kept_apart_vertices)
       .value("skipped_header_lines", rs.skipped_header_lines)
       .value("unreferenced_vertices", rs.unreferenced_vertices)
       .end_object();

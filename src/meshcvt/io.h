@@ -14,7 +14,9 @@ namespace meshcvt {
 /// How a file is turned into a Mesh.
 struct ReadOptions {
   /// Merge vertices with bit-identical positions (default). Files exported with split normals or UVs
-  /// otherwise fall apart into one component per face.
+  /// otherwise fall apart into one component per face. Vertices whose merge would join two edges
+  /// that are manifold in the file (two faces each, in opposite directions) into one edge of three
+  /// or more faces stay apart (ReadStats::kept_apart_vertices).
   bool weld = true;
   /// Positions are kept as 32-bit floats, which hold a coordinate to about 2^-24 of its magnitude: a
   /// mesh far from the origin for its size (a georeferenced scan in UTM metres: coordinates of 4e6
@@ -38,6 +40,10 @@ struct ReadStats {
   uint64_t file_polygons = 0;          ///< faces as stored in the file
   uint64_t triangulated_polygons = 0;  ///< polygons with more than 3 corners that were split
   uint64_t welded_vertices = 0;        ///< vertices merged into an earlier one with the same position
+  /// Vertices that share a position with an earlier one but were not welded to it: welding would have
+  /// made an edge of three or more faces out of edges that were manifold in the file (a surface that
+  /// touches itself along an edge; counted in the mesh's vertices, not in welded_vertices).
+  uint64_t kept_apart_vertices = 0;
   uint64_t unreferenced_vertices = 0;  ///< vertices no face uses, dropped
   /// PLY: header lines before the first `element` that start with no PLY keyword (Blender 2.4x
   /// wrote "Created by Blender3D ..." there), skipped; the first one's line number (1-based).

@@ -2,8 +2,9 @@
 # CLI test of `meshcvt info` (text and --json, --no-weld) and `meshcvt subdivide`: counts are
 # compared with numbers computed here independently (OFF header read with awk; edges, boundary,
 # components, area, bbox with a few lines of plain Python), on the real elephant mesh and on small
-# meshes written here (bow-tie, split vertices). Also: a missing file fails with exit 1 and a
-# message naming the file; too many subdivision levels exit 2 and write nothing.
+# meshes written here (bow-tie, split vertices, two parts touching along an edge). Also: a missing
+# file fails with exit 1 and a message naming the file; too many subdivision levels exit 2 and
+# write nothing.
 # usage: info.sh /path/to/meshcvt /path/to/tests/data
 set -euo pipefail
 cli=$1
@@ -127,6 +128,34 @@ check split "$tmp/json" - 'd["components"] == 1 and d["vertices"] == 4 and d["re
 check split-no-weld "$tmp/json" "$tmp/split.off" \
   'd["components"] == 2 and d["read"]["welded_vertices"] == 0 and d["read"]["weld"] is False' ||
   fail "split --no-weld"
+
+# ---- two closed tetrahedra whose edges 0-1 and 4-5 lie at the same place: welding would make one
+# edge of four faces out of two manifold edges of the file, so those vertices are kept apart
+cat >"$tmp/touching.off" <<'EOF'
+OFF
+8 8 0
+0 0 0
+1 0 0
+0.5 1 0.2
+0.5 0.3 1
+0 0 0
+1 0 0
+0.5 -1 0.2
+0.5 -0.3 -1
+3 0 1 2
+3 0 3 1
+3 0 2 3
+3 1 3 2
+3 4 6 5
+3 4 5 7
+3 4 7 6
+3 5 6 7
+EOF
+"$cli" info "$tmp/touching.off" --json >"$tmp/json" || fail "info touching failed"
+check touching "$tmp/json" "$tmp/touching.off" \
+  'd["components"] == 2 and d["nonmanifold_edges"] == 0 and d["read"]["welded_vertices"] == 0 and d["read"]["kept_apart_vertices"] == 2' ||
+  fail "touching: the weld made a non-manifold edge, or the vertices kept apart were not reported"
+"$cli" info "$tmp/touching.off" | grep -q "^kept apart (weld) *2$" || fail "touching: no 'kept apart' row in the text output"
 
 # ---- a PLY whose header has a line without a keyword before its elements (as Blender 2.4x wrote
 # them): read, with a note naming the file and the line, and the count in the report
