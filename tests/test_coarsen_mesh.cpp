@@ -647,6 +647,25 @@ TEST_CASE("coarsen_mesh: every component survives with at least its minimum") {
   CHECK(inspect(r.coarse.mesh).components == 12);
 }
 
+TEST_CASE("coarsen_mesh: a component broken at its share gets more clusters from the others") {
+  // A sphere and a strip two triangles wide: at its share of 60 or 100 the strip has 3-4 clusters,
+  // each reaching across it from side to side (a cluster meeting the boundary in two arcs), and no
+  // fix within that count helps. Twice as many, taken from the sphere, do.
+  const Mesh m = test::combine(test::icosphere(3), test::grid(12, 2, 1.2, 0.2), 3);
+  const Topology t = build_topology(m);
+  REQUIRE(t.component_count == 2);
+  for (uint32_t n : {60u, 100u}) {
+    CAPTURE(n);
+    const ComponentAllocation share = allocate_component_clusters(m, t, n);
+    const CoarsenMeshResult r = run(m, n);
+    check_valid(m, r, n);
+    CHECK(r.reallocations >= 1);
+    CHECK(r.allocation.clusters[1] > share.clusters[1]);
+    CHECK(r.allocation.clusters[0] + r.allocation.clusters[1] == n);
+    CHECK(r.initial_defects > 0);
+  }
+}
+
 TEST_CASE("coarsen_mesh: allocation follows area and the minimums, errors name the numbers") {
   Mesh small = test::icosphere(3), big = test::icosphere(3);
   for (float& p : big.positions) p *= 3;  // 9 times the area

@@ -90,6 +90,9 @@ std::string describe_fixes(const CoarsenMeshResult& job) {
   if (job.refined_clusters)
     s += "; clustered at " + std::to_string(job.refined_clusters) + " and merged back (" +
          std::to_string(job.merged_back) + " merges)";
+  if (job.reallocations)
+    s += "; redone " + std::to_string(job.reallocations) + (job.reallocations == 1 ? " time" : " times") +
+         " with more clusters for the broken components";
   if (job.face_start_components) {
     s += "; " + std::to_string(job.face_start_components) + " components rebuilt from single faces";
     if (job.face_start_from_finer == job.face_start_components)
@@ -326,6 +329,7 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("refined_clusters", job.refined_clusters).value("merged_back", job.merged_back)
         .value("face_start_components", job.face_start_components)
         .value("face_start_from_finer", job.face_start_from_finer)
+        .value("reallocations", job.reallocations)
         .value("abandoned_fixes", uint64_t(job.abandoned_fixes)).value("iterations", job.fix_iterations);
     j.end_object();
     j.begin_array("fixes");

@@ -403,6 +403,10 @@ struct CoarsenMeshResult {
   uint32_t face_start_components = 0;
   uint32_t face_start_from_finer = 0;
   size_t abandoned_fixes = 0;        ///< fixes made on attempts that were not kept (not in `fixes`)
+  /// Times the whole job was done again with more clusters for the components of several that
+  /// stayed broken (each doubled, at most a cluster per 4 faces, taken from the others by their
+  /// shares), each time leaving fewer defects; `allocation` is the last one. 0: the first kept.
+  uint32_t reallocations = 0;
   /// Defects are left (coarse.defects): no attempt removed them all; `clustering` is then the one
   /// with the fewest defects.
   bool defects_remain = false;
