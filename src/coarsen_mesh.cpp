@@ -1978,16 +1978,6 @@ namespace {
 // allocate_component_clusters, each component given at least floors[c] (>= its minimum) instead
 // of its minimum where floors is given and their sum is at most n.
 ComponentAllocation allocate_with_floors(const Mesh& mesh, const Topology& topology, uint32_t n,
-                                         const std::vector<float>* density, const std::vector<uint32_t>* floors);
-}  // namespace
-
-ComponentAllocation allocate_component_clusters(const Mesh& mesh, const Topology& topology, uint32_t n,
-                                                const std::vector<float>* density) {
-  return allocate_with_floors(mesh, topology, n, density, nullptr);
-}
-
-namespace {
-ComponentAllocation allocate_with_floors(const Mesh& mesh, const Topology& topology, uint32_t n,
                                          const std::vector<float>* density, const std::vector<uint32_t>* floors) {
   if (topology.face_component.size() != mesh.face_count())
     throw OptionError("coarsen: the topology was not built for this mesh");
@@ -2094,6 +2084,11 @@ ComponentAllocation allocate_with_floors(const Mesh& mesh, const Topology& topol
   return a;
 }
 }  // namespace
+
+ComponentAllocation allocate_component_clusters(const Mesh& mesh, const Topology& topology, uint32_t n,
+                                                const std::vector<float>* density) {
+  return allocate_with_floors(mesh, topology, n, density, nullptr);
+}
 
 namespace {
 
@@ -2465,8 +2460,8 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
   // Components of several that stay broken at their share (b9_mesh -> 1453: a 186-face plate with
   // 7 holes at 16 clusters, a 25-face strip at 3) are given twice their clusters, taken from the
   // others by the same shares, and the whole job is done again; kept when it leaves fewer
-  // defects. (Every attempt above works within each component's count.)
-  // (Floors only rise: a component grown in one round and clean in the next keeps its count.)
+  // defects. (Every attempt above works within each component's count.) Floors only rise: a
+  // component grown in one round and clean in the next keeps its count.
   std::vector<uint32_t> floors(topology.component_count, 0);
   for (uint32_t round = 0; round < kReallocationRounds && topology.component_count > 1 && out.defects_remain; ++round) {
     const std::vector<uint32_t> broken = defects_per_component(topology, out.clustering.labels, n, out.coarse.defects);
@@ -2479,15 +2474,18 @@ CoarsenMeshResult coarsen_mesh(const Mesh& mesh, const Topology& topology, const
       floors[c] = more;
       ++grown;
     }
-    if (grown == 0) break;
+    uint64_t wanted = 0;  // (allocate_with_floors would fall back to the minimums past n)
+    for (uint32_t c = 0; c < topology.component_count; ++c)
+      wanted += std::clamp(floors[c], out.allocation.minimum[c], out.allocation.faces[c]);
+    if (grown == 0 || wanted > n) break;  // no room for it among the others
     ComponentAllocation more = allocate_with_floors(mesh, topology, n, &options.cluster.density, &floors);
-    if (more.clusters == out.allocation.clusters) break;  // no room for it among the others
     CoarsenMeshResult again = coarsen_allocated(mesh, topology, given, options, std::move(more));
     if (again.coarse.defects.size() >= out.coarse.defects.size()) break;
     again.reallocations = out.reallocations + 1;
     again.initial_defects = out.initial_defects;  // (the first clustering's, as without a redo)
     again.cluster_seconds += out.cluster_seconds;
     again.fix_seconds += out.fix_seconds + out.coarsen_seconds;  // the abandoned attempt's
+    again.abandoned_fixes += out.abandoned_fixes + out.fixes.size();
     out = std::move(again);
   }
   return out;

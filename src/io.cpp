@@ -404,9 +404,10 @@ static uint64_t keep_manifold_edges_apart(const std::vector<uint32_t>& indices, 
   std::vector<uint32_t> candidate_offsets, ends, separate;
   std::vector<uint8_t> zips(vertex_count, 0), apart(vertex_count, 0);
   // Whether some welded edge at group g has three or more faces: counted per neighbouring group
-  // without sorting (the files that get here are mostly seams that welding zips, every edge of
-  // two faces: a 1.2M-face mesh whose every vertex was written twice read in 0.15 s, 0.6 s with
-  // the sort below for every group).
+  // without sorting, and only where one does is every group sorted below (the files that get here
+  // are mostly seams that welding zips, every edge of two faces: a 1.2M-face mesh whose every
+  // vertex was written twice reads in 0.15 s without this check, 0.35 s with it, 0.6 s when every
+  // group was sorted).
   std::vector<uint32_t> count(vertex_count, 0), touched;
   auto heavy_edge_at = [&](uint32_t g) {
     bool heavy = false;
