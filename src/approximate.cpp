@@ -1833,7 +1833,7 @@ uint32_t converge(BoundaryIteration& it, const ClusterProblem& problem, const To
 class PartitionRefiner {
  public:
   PartitionRefiner(const Mesh& mesh, const Topology& topology, const ApproximateOptions& o, Clustering& out)
-      : mesh_(mesh), topology_(topology), o_(o), out_(out), problem_(make_problem(mesh, o, out)), pool_(o.threads),
+      : topology_(topology), o_(o), out_(out), problem_(make_problem(mesh, o, out)), pool_(o.threads),
         it_(problem_, mesh, topology, TopologyMode::preserving, true, pool_) {
     it_.reset(out.labels);
     for (const IterationRecord& r : out.history) round_ = std::max(round_, r.round + 1);
@@ -1955,7 +1955,6 @@ class PartitionRefiner {
     round_ = converge(it_, problem_, topology_, o_, round_, out_, pool_, repair_check_);
   }
 
-  const Mesh& mesh_;
   const Topology& topology_;
   const ApproximateOptions& o_;
   Clustering& out_;

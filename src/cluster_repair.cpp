@@ -360,10 +360,11 @@ uint32_t restore_cluster_count(const ClusterProblem& problem, const Topology& to
       // cluster covering a protrusion, a cap and a band around it, split from its tip and its
       // far rim would give back the cap enclosed by the band, an isolated cluster that repair
       // dissolves again, round after round.)
-      auto on_border = [&](uint32_t f) {
+      // (c by value: clang 14 refuses a structured binding in a lambda's capture.)
+      auto on_border = [&, cluster = c](uint32_t f) {
         for (int e = 0; e < 3; ++e) {
           uint32_t o = topology.face_adjacent[3 * size_t(f) + e];
-          if (o != kNone && labels[o] != c) return true;
+          if (o != kNone && labels[o] != cluster) return true;
         }
         return false;
       };
