@@ -718,6 +718,18 @@ TEST_CASE("coarsen_mesh: same result for any thread count") {
   CHECK(one.clustering.labels == two.clustering.labels);
   CHECK(one.coarse.mesh.indices == two.coarse.mesh.indices);
   CHECK(one.fixes.size() == two.fixes.size());
+  // and where a broken component is given more clusters and the job is done again
+  const Mesh parts = test::combine(test::icosphere(3), test::grid(12, 2, 1.2, 0.2), 3);
+  const Topology pt = build_topology(parts);
+  o.cluster.clusters = 60;
+  CoarsenMeshResult redone_two = coarsen_mesh(parts, pt, o);
+  o.cluster.threads = 1;
+  o.coarsen.threads = 1;
+  CoarsenMeshResult redone_one = coarsen_mesh(parts, pt, o);
+  CHECK(redone_one.reallocations >= 1);
+  CHECK(redone_one.reallocations == redone_two.reallocations);
+  CHECK(redone_one.clustering.labels == redone_two.clustering.labels);
+  CHECK(redone_one.coarse.mesh.positions == redone_two.coarse.mesh.positions);
 }
 
 // ---- engine support
