@@ -4,8 +4,9 @@
 # with chi = -4 and exactly n vertices, all used (checked here in Python from the written OFF file,
 # independently of meshcvt), stdout must print the "fixes:" line, and the JSON report must record
 # every fix (kind, clusters, round) and the loop's summary. --fix-rounds 0 reports the defects
-# instead (a warning, defects_remain in the report). n below what the surface needs is exit 2 with
-# the numbers in the message, and writes nothing.
+# instead (a warning, defects_remain in the report); where the fixes ran and defects remain
+# (n = 10, the fewest a genus-3 surface allows) the warning suggests a larger -n. n below what the
+# surface needs is exit 2 with the numbers in the message, and writes nothing.
 # usage: coarsen_fixes.sh /path/to/meshcvt /path/to/tests/data
 set -euo pipefail
 cli=$1
@@ -97,6 +98,13 @@ PY
 "$cli" coarsen "$data/elephant.off" -n 300 -o "$tmp/raw.off" --device cpu --no-error --fix-rounds 0 \
   --report "$tmp/raw.json" >"$tmp/out" 2>"$tmp/err" || fail "--fix-rounds 0 failed: $(cat "$tmp/err")"
 grep -q "warning: [1-9][0-9]* defects remain" "$tmp/err" || fail "no warning with --fix-rounds 0: $(cat "$tmp/err")"
+grep -q "larger -n" "$tmp/err" && fail "--fix-rounds 0: the warning suggests a larger -n, not the fixes: $(cat "$tmp/err")"
+# Genus 3 at 10 vertices (its fewest possible): the fixes find no valid clustering, and the warning
+# says what would help. (At 14 they do.)
+"$cli" coarsen "$data/elephant.off" -n 10 -o "$tmp/ten.off" --device cpu --no-error >"$tmp/out" 2>"$tmp/err" ||
+  fail "elephant -> 10 failed: $(cat "$tmp/err")"
+grep -q "warning: [1-9][0-9]* defects remain (.*): the output is not a valid manifold; a larger -n gives the fixes more room\$" \
+  "$tmp/err" || fail "elephant -> 10: no warning with the remedy: $(cat "$tmp/err")"
 python3 - "$tmp/raw.json" <<'PY' || fail "report with --fix-rounds 0"
 import json, sys
 r = json.load(open(sys.argv[1]))
