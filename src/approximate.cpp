@@ -629,8 +629,10 @@ class Mesher {
   // Coloring, redone only for regions whose border changed (`dirty_`: an anchor was added on it).
   std::vector<uint8_t> dirty_;
   // Anchors are only ever added, so a border vertex's (distance, color) only ever decreases (a
-  // chord split gives it a nearer end): a region colored before is colored again from the border
-  // vertices whose key decreased since, keeping the rest of its coloring. The multi-source
+  // chord split gives it a nearer end; but for a tie where vertices share a position, which
+  // recolor() meets by coloring that round's regions from scratch): a region colored before is
+  // colored again from the border vertices whose key decreased since, keeping the rest of its
+  // coloring. The multi-source
   // Dijkstra's result is the least fixed point of its relaxation in the (distance, color) order,
   // which that decrease-only update reaches as well as a coloring from scratch: the same colors.
   std::vector<uint8_t> colored_;        // per region: colored from scratch once
@@ -1067,6 +1069,9 @@ void Mesher::index_regions() {
 void Mesher::recolor() {
   std::vector<Chord> chords;
   std::vector<double> from_a, from_b;
+  // A border vertex whose (distance, color) rose: every region of this round is colored from
+  // scratch (see below).
+  bool key_rose = false;
   for (uint32_t r = 0; r < regions_; ++r) {
     if (!dirty_[r] || !region_ok_[r]) continue;
     loop_chords(region_loop_[r], chords);
@@ -1088,8 +1093,11 @@ void Mesher::recolor() {
         const uint32_t color = to_a ? a : b;
         const double distance = to_a ? da : db;
         if (color == vc_[v].color && distance == vc_[v].distance) continue;
-        // (only ever smaller: a chord is only ever split, see colored_)
-        assert(distance < vc_[v].distance || (distance == vc_[v].distance && color < vc_[v].color));
+        // Only ever smaller, a chord being only ever split (see colored_), but for a tie: where the
+        // arc from v to the new end has no length (vertices at one position, a damaged input), the
+        // new end is as near as the old one and may have the higher id. The decrease-only update
+        // would then keep colors from the old key.
+        key_rose |= !(distance < vc_[v].distance || (distance == vc_[v].distance && color < vc_[v].color));
         vc_[v].color = color;
         vc_[v].distance = distance;
         seed_changed(v);
@@ -1130,7 +1138,7 @@ void Mesher::recolor() {
       for (size_t i = bounds[p]; i < bounds[p + 1]; ++i) {
         const uint32_t r = todo[i];
         if (colored_[r]) {
-          color_region(r, heap, !from_scratch_);
+          color_region(r, heap, !from_scratch_ && !key_rose);
           continue;
         }
         if (copy_previous_coloring(r)) copied.fetch_add(1, std::memory_order_relaxed);

@@ -451,6 +451,38 @@ TEST_CASE("mesh_partition: recoloring a region from its changed border gives the
   CHECK(copied > 0);        // and passes after a split
 }
 
+TEST_CASE("mesh_partition: border vertices at one position do not break the recoloring from the changed border") {
+  // A damaged mesh (found by bench/pipeline_stress.py): corner.off with its vertices moved onto three
+  // points, read without welding, so chords run along edges of no length. A chord split there can
+  // give a border vertex the same distance (0) to a new end of a higher id: its (distance, color)
+  // rises, where the recoloring from the changed border vertices assumes it only falls (an assert
+  // fired in approximate.cpp's Mesher::recolor). The regions around it are colored from scratch
+  // then: the outputs must be those of coloring every region from scratch in every round.
+  const std::string path = temp_path("coincident.off");
+  {
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    REQUIRE(f != nullptr);
+    std::fputs("OFF\n9 29 0\n1 0 0\n1 1 0\n1 1 0\n2 0 1\n2 0 1\n1 1 0\n1 0 0\n1 0 0\n1 0 0\n"
+               "3 0 0 3\n3 0 3 2\n3 0 1 4\n3 0 4 3\n3 2 3 0\n3 2 0 0\n3 0 5 0\n3 0 0 0\n3 5 6 1\n3 5 1 0\n"
+               "3 1 6 8\n3 1 8 4\n3 3 4 8\n3 3 8 7\n3 3 7 0\n3 3 0 0\n3 0 0 0\n3 0 0 0\n3 2 0 0\n3 2 0 0\n"
+               "3 0 2 0\n3 0 0 0\n3 0 0 0\n3 0 0 7\n3 0 0 7\n3 0 7 5\n3 5 7 8\n3 5 8 6\n3 2 0 0\n",
+               f);
+    std::fclose(f);
+  }
+  ReadOptions apart;
+  apart.weld = false;
+  const Mesh m = read_mesh(path, apart);
+  std::remove(path.c_str());
+  const Topology t = build_topology(m);
+  const ShapeApproximation s = approximate_shape(m, t, with_proxies(4));
+  const uint32_t regions = *std::max_element(s.labels.begin(), s.labels.end()) + 1;
+  const ShapeApproximation a = mesh_partition(m, t, s.labels, regions);
+  const ShapeApproximation b = detail::mesh_partition_from_scratch(m, t, s.labels, regions);
+  CHECK(a.mesh.positions == b.mesh.positions);
+  CHECK(a.mesh.indices == b.mesh.indices);
+  CHECK(a.fixes == b.fixes);
+}
+
 TEST_CASE("mesh_partition: a direct triangulation is kept while other regions take anchors") {
   // A region triangulated directly keeps its triangulation from round to round while its polygon
   // and positions stay the same. Every round numbers the output vertices again (an anchor added
