@@ -349,7 +349,8 @@ static std::vector<uint32_t> weld_representatives(const std::vector<float>& posi
 // it in opposite directions (a manifold edge in the file), the vertices at each end of those file
 // edges are kept apart again: one keeps the shared vertex, the others their own. Not where a vertex
 // to be kept apart also zips two of the file's edges into one elsewhere (a seam that welding
-// closes): the seam matters more; nor where one of the faces at the edge collapses (see below).
+// closes): the seam matters more; nor where a face at the edge or at a vertex to be kept apart has
+// two corners at one position (see below).
 // Returns the number of vertices kept apart; `representative` and `welded` are updated. Cost: the
 // reading of a 1.2M-face binary PLY with 11% of its vertices written twice (seams) 92-107 -> 122-129
 // ms; nothing measurable for the same mesh as binary STL (no vertex used twice), none where
@@ -382,6 +383,9 @@ static uint64_t keep_manifold_edges_apart(const std::vector<uint32_t>& indices, 
     if (!shared) return 0;
     for (uint8_t& m : multi) m = m != 0;
   }
+  // The groups of one position, as welded at first: what makes a face a sliver does not change
+  // when vertices are kept apart.
+  const std::vector<uint32_t> position_group = representative;
   build_groups();
   face_offsets.assign(vertex_count + 1, 0);
   for (uint32_t v : indices)
@@ -444,7 +448,8 @@ static uint64_t keep_manifold_edges_apart(const std::vector<uint32_t>& indices, 
           if (j > face_offsets[m] && vertex_faces[j] == vertex_faces[j - 1]) continue;  // m twice in a face
           const uint32_t* c = &indices[3 * size_t(vertex_faces[j])];
           const uint32_t r[3] = {representative[c[0]], representative[c[1]], representative[c[2]]};
-          const bool collapses = r[0] == r[1] || r[1] == r[2] || r[0] == r[2];
+          const uint32_t p[3] = {position_group[c[0]], position_group[c[1]], position_group[c[2]]};
+          const bool collapses = p[0] == p[1] || p[1] == p[2] || p[0] == p[2];
           const int k = c[0] == m ? 0 : c[1] == m ? 1 : 2;
           const int next = (k + 1) % 3, previous = (k + 2) % 3;
           if (r[next] != g) at.push_back({r[next], m, c[next], collapses});
@@ -493,7 +498,18 @@ static uint64_t keep_manifold_edges_apart(const std::vector<uint32_t>& indices, 
         for (uint32_t v : ends)
           if (v != keep) separate.push_back(v);
       }
-      if (std::none_of(separate.begin(), separate.end(), [&](uint32_t v) { return zips[v] != 0; }))
+      // Nor one with a face whose corners share a position (a sliver the weld collapses): kept
+      // apart, it would stay as a face of no area. (Corners all moved onto a few points, a damaged
+      // file, came apart one round after another: every round made more faces seem whole.)
+      auto in_sliver = [&](uint32_t v) {
+        for (uint32_t j = face_offsets[v]; j < face_offsets[v + 1]; ++j) {
+          const uint32_t* corner = &indices[3 * size_t(vertex_faces[j])];
+          for (int k = 0; k < 3; ++k)
+            if (corner[k] != v && position_group[corner[k]] == position_group[v]) return true;
+        }
+        return false;
+      };
+      if (std::none_of(separate.begin(), separate.end(), [&](uint32_t v) { return zips[v] != 0 || in_sliver(v); }))
         for (uint32_t v : separate) apart[v] = 1;
     }
     for (size_t v = 0; v < vertex_count; ++v)

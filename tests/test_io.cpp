@@ -788,6 +788,24 @@ TEST_CASE("io: welding leaves apart the vertices that would make a manifold edge
     CHECK(t.boundary_edges == 0);  // the second tetrahedron's seam closed
     CHECK(t.nonmanifold_edges == 1);
   }
+  SUBCASE("a grid whose corners were all moved onto three points welds as before") {
+    // (A damaged corner.off from bench/pipeline_stress.py. Kept apart, its vertices would leave
+    // faces of no area with distinct corners; before the check looked at the positions, every
+    // vertex kept apart made the next faces seem whole, and 6 came apart.)
+    const std::string damaged =
+        "OFF\n16 29 0\n"
+        "1.0 0.0 0.0\n1.0 0.0 0.0\n1.0 1.0 0.0\n1.0 1.0 0.0\n2.0 0.0 1.0\n2.0 0.0 1.0\n"
+        "1.0 0.0 0.0\n1.0 0.0 0.0\n1.0 0.0 0.0\n1.0 1.0 0.0\n1.0 0.0 0.0\n1.0 0.0 0.0\n"
+        "1.0 0.0 0.0\n1.0 0.0 0.0\n1.0 0.0 0.0\n1.0 0.0 0.0\n"
+        "3 0 1 4\n3 0 4 3\n3 1 2 5\n3 1 5 4\n3 3 4 7\n3 3 7 6\n3 8 9 1\n3 8 1 0\n3 9 10 2\n"
+        "3 9 2 1\n3 2 10 13\n3 2 13 5\n3 4 5 13\n3 4 13 12\n3 4 12 15\n3 4 15 7\n3 6 7 15\n"
+        "3 6 15 14\n3 3 6 14\n3 3 14 11\n3 0 3 11\n3 0 11 8\n3 11 14 15\n3 11 15 12\n3 8 11 12\n"
+        "3 8 12 9\n3 9 12 13\n3 9 13 10\n3 3 6 14\n";
+    const Mesh mesh = meshcvt::read_mesh(dir.write("d.off", damaged), {}, &stats);
+    CHECK(stats.kept_apart_vertices == 0);
+    CHECK(stats.welded_vertices == 13);
+    CHECK(meshcvt::build_topology(mesh).collapsed_faces == 25);
+  }
   SUBCASE("a sliver face the weld collapses is collapsed, its neighbours joined") {
     // A tetrahedron whose edge 0-1 was split at a point m (vertex 4) at vertex 0's position: the
     // faces 0-m-2 and m-0-3 have no area; welding m into 0 collapses them and gives back the
