@@ -632,9 +632,9 @@ class Mesher {
   // chord split gives it a nearer end; but for a tie where vertices share a position, which
   // recolor() meets by coloring that round's regions from scratch): a region colored before is
   // colored again from the border vertices whose key decreased since, keeping the rest of its
-  // coloring. The multi-source
-  // Dijkstra's result is the least fixed point of its relaxation in the (distance, color) order,
-  // which that decrease-only update reaches as well as a coloring from scratch: the same colors.
+  // coloring. The multi-source Dijkstra's result is the least fixed point of its relaxation in the
+  // (distance, color) order, which that decrease-only update reaches as well as a coloring from
+  // scratch: the same colors.
   std::vector<uint8_t> colored_;        // per region: colored from scratch once
   std::vector<uint8_t> seed_changed_;   // per vertex: its key decreased since the last recolor()
   std::vector<uint32_t> changed_seeds_;  // those vertices
