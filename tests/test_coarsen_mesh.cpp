@@ -666,6 +666,21 @@ TEST_CASE("coarsen_mesh: a component broken at its share gets more clusters from
   }
 }
 
+TEST_CASE("coarsen_mesh: a small broken component beside a large one is rebuilt without clustering the large one again") {
+  // The strip of the test above beside a sphere of 20480 faces: it holds under 1% of the faces, so
+  // no finer clustering of the whole mesh is tried (each would cluster the sphere again); the
+  // strip is rebuilt from single faces and merged down to its count.
+  const Mesh m = test::combine(test::icosphere(5), test::grid(12, 2, 1.2, 0.2), 3);
+  const Topology t = build_topology(m);
+  REQUIRE(t.component_count == 2);
+  REQUIRE(m.face_count() > 100 * 48);
+  const CoarsenMeshResult r = run(m, 200);
+  check_valid(m, r, 200);
+  CHECK(r.initial_defects > 0);
+  CHECK(r.refined_clusters == 0);
+  CHECK(r.face_start_components == 1);
+}
+
 TEST_CASE("coarsen_mesh: allocation follows area and the minimums, errors name the numbers") {
   Mesh small = test::icosphere(3), big = test::icosphere(3);
   for (float& p : big.positions) p *= 3;  // 9 times the area

@@ -447,7 +447,8 @@ struct CoarsenMeshResult {
 ///     (TopologyMode::preserving, same counts per component) to smooth them; defects it brings back
 ///     are fixed by more rounds, else the smoothing is redone in steps that keep the dual valid;
 ///  4. components of manifold surfaces still broken: a valid clustering at 2n, 4n, ... 32n (at
-///     least 4 faces per cluster) is merged back to n by merges that keep the dual valid (the link
+///     least 4 faces per cluster; not where the broken components hold under 1% of the faces,
+///     each such clustering being of the whole mesh) is merged back to n by merges that keep the dual valid (the link
 ///     condition of an edge contraction, and every corner of four or more clusters keeping a
 ///     triangulation without an edge used twice) and replaces them; where greedy merging stops
 ///     above n (near the fewest vertices the surface allows), a dual edge flip (a strip of faces
