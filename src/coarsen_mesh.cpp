@@ -2124,9 +2124,9 @@ namespace {
 // cluster of theirs keeps then (clusters of fewer than 4 faces resolve nothing: as the finer
 // clusterings' limit).
 constexpr uint32_t kReallocationRounds = 3;
+constexpr uint32_t kReallocationFacesPerCluster = 4;
 // Finer clusterings are tried only where the broken components hold at least 1/this of the faces.
 constexpr uint64_t kFinerClusteringShare = 100;
-constexpr uint32_t kReallocationFacesPerCluster = 4;
 
 // coarsen_mesh's steps 1-4 (see meshcvt/coarsen.h) with the given allocation of the n clusters to
 // the components. given: the caller's options; options: the same with degenerate_to_surface off.
@@ -2183,7 +2183,6 @@ CoarsenMeshResult coarsen_allocated(const Mesh& mesh, const Topology& topology, 
         if (!out.allocation.manifold[c]) broken[c] = 0;
       return broken;
     };
-    auto any = [](const std::vector<uint32_t>& v) { return std::any_of(v.begin(), v.end(), [](uint32_t x) { return x > 0; }); };
     const uint64_t faces = mesh.face_count();
     // Per component, the finer clustering that left it with the fewest defects (ties: the finer):
     // where it stays broken, the start from single faces begins from it instead (see below).
@@ -2206,16 +2205,14 @@ CoarsenMeshResult coarsen_allocated(const Mesh& mesh, const Topology& topology, 
     // Each finer clustering clusters the whole mesh again. Where the broken components hold under
     // 1% of its faces (a strip of 48 faces beside a 1.2M-face scan: 5 clusterings of the scan, 11.4
     // s, before the strip was rebuilt from single faces anyway), they go to that rebuild directly.
-    const auto small_next_to_the_rest = [&] {
+    const auto worth_a_finer_clustering = [&] {
       const std::vector<uint32_t> broken = broken_manifolds(result.labels, n, result.defects);
       uint64_t broken_faces = 0;
       for (uint32_t c = 0; c < topology.component_count; ++c)
         if (broken[c] > 0) broken_faces += out.allocation.faces[c];
-      return broken_faces * kFinerClusteringShare < faces;
+      return broken_faces > 0 && broken_faces * kFinerClusteringShare >= faces;
     };
-    for (uint64_t factor = 2; !geometry_only && any(broken_manifolds(result.labels, n, result.defects)) && factor <= 32 &&
-                              !small_next_to_the_rest();
-         factor *= 2) {
+    for (uint64_t factor = 2; !geometry_only && factor <= 32 && worth_a_finer_clustering(); factor *= 2) {
       uint64_t finer = n * factor;
       if (finer > faces / 4) break;  // clusters of fewer than 4 faces resolve nothing
       ClusterOptions fo = co;
