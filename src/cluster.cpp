@@ -218,7 +218,7 @@ Clustering cluster(const Mesh& mesh, const Topology& topology, const ClusterOpti
   DeviceChoice choice;
   bool no_gpu_to_be_had = false;
   try {
-    choice = resolve_device_for_mesh(options.device, mesh.face_count());
+    choice = resolve_device_for_mesh(options.device, mesh.face_count(), options.threads);
   } catch (const DeviceError& e) {  // no loader, no such device, none usable
     if (!options.cpu_fallback) throw;
     no_gpu_to_be_had = true;

@@ -2,11 +2,13 @@
 // rule). The Vulkan work is in host/; this file only ranks and explains.
 #include "meshcvt/device.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <system_error>
+#include <thread>
 
 #include "meshcvt/error.h"
 #include "vk_context.h"
@@ -167,8 +169,13 @@ DeviceChoice resolve_device(const std::string& request) {
   return resolve(parsed, list_devices());
 }
 
-DeviceChoice resolve_device_for_mesh(const std::string& request, size_t faces) {
-  if (faces < kAutoGpuMinFaces && parse_request(request).kind == Request::automatic) return cpu_choice();
+size_t auto_gpu_min_faces(unsigned threads) {
+  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());  // as WorkerPool
+  return kAutoGpuMinFaces * std::max(1u, threads / 2);
+}
+
+DeviceChoice resolve_device_for_mesh(const std::string& request, size_t faces, unsigned threads) {
+  if (faces < auto_gpu_min_faces(threads) && parse_request(request).kind == Request::automatic) return cpu_choice();
   return resolve_device(request);
 }
 

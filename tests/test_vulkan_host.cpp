@@ -146,18 +146,30 @@ TEST_CASE("resolve_device: empty request reads MESHCVT_DEVICE") {
   }
 }
 
-TEST_CASE("resolve_device_for_mesh: auto keeps meshes below a million faces on the CPU, unprobed") {
+TEST_CASE("resolve_device_for_mesh: auto keeps meshes below a million faces per two threads on the CPU, unprobed") {
   // A probe here would fail loudly: Vulkan is forced to be probed and its loader does not exist.
   // (ctest runs each case in a process of its own, so the loader is not already loaded.)
   ScopedEnv probe("MESHCVT_PROBE_VULKAN", "1");
   ScopedEnv loader("MESHCVT_VULKAN_LIBRARY", "/nonexistent/libvulkan.so.1");
   ScopedEnv no_default("MESHCVT_DEVICE", nullptr);
+  CHECK(auto_gpu_min_faces(1) == kAutoGpuMinFaces);
+  CHECK(auto_gpu_min_faces(2) == kAutoGpuMinFaces);
+  CHECK(auto_gpu_min_faces(3) == kAutoGpuMinFaces);
+  CHECK(auto_gpu_min_faces(4) == 2 * kAutoGpuMinFaces);
+  CHECK(auto_gpu_min_faces(16) == 8 * kAutoGpuMinFaces);
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  CHECK(auto_gpu_min_faces(0) == auto_gpu_min_faces(cores));
   for (const char* request : {"auto", ""}) {
     CAPTURE(request);
-    const DeviceChoice small = resolve_device_for_mesh(request, kAutoGpuMinFaces - 1);
-    CHECK_FALSE(small.use_gpu);
-    CHECK(small.notice.empty());
-    CHECK(small.description == "cpu");
+    for (unsigned threads : {0u, 1u, 2u, 16u}) {
+      CAPTURE(threads);
+      const DeviceChoice small = resolve_device_for_mesh(request, auto_gpu_min_faces(threads) - 1, threads);
+      CHECK_FALSE(small.use_gpu);
+      CHECK(small.notice.empty());
+      CHECK(small.description == "cpu");
+    }
+    // 4M faces: a GPU's size at two threads, not at sixteen.
+    CHECK(resolve_device_for_mesh(request, 4 * kAutoGpuMinFaces, 16).notice.empty());
   }
   {
     ScopedEnv from_environment("MESHCVT_DEVICE", "auto");
@@ -168,8 +180,11 @@ TEST_CASE("resolve_device_for_mesh: auto keeps meshes below a million faces on t
   // (unless an earlier case in this process loaded one).
   if (!vk::vulkan_loaded()) {
     CHECK_THROWS_AS(resolve_device_for_mesh("gpu", 10), DeviceError);
+    CHECK_THROWS_AS(resolve_device_for_mesh("gpu", 10, 16), DeviceError);
     // Large meshes under auto do probe: the failure becomes the fallback's notice.
-    CHECK_FALSE(resolve_device_for_mesh("auto", kAutoGpuMinFaces).notice.empty());
+    CHECK_FALSE(resolve_device_for_mesh("auto", kAutoGpuMinFaces, 2).notice.empty());
+    CHECK_FALSE(resolve_device_for_mesh("auto", 4 * kAutoGpuMinFaces, 2).notice.empty());
+    CHECK_FALSE(resolve_device_for_mesh("auto", auto_gpu_min_faces(0)).notice.empty());
   }
 }
 

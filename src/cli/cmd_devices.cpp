@@ -1,8 +1,10 @@
 // meshcvt CLI: `meshcvt devices [--json] [--check]` lists the Vulkan devices, what meshcvt can
 // use them for, and which engine --device auto / gpu would pick; --check runs the GPU self-test
 // on every usable device.
+#include <algorithm>
 #include <cstdio>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "cli/command.h"
@@ -77,7 +79,9 @@ void print_text(const std::vector<DeviceInfo>& devices, const std::vector<SelfTe
   }
   std::string automatic = choice_text("auto", devices);
   if (automatic.rfind("gpu:", 0) == 0)
-    automatic += ", for meshes of " + std::to_string(kAutoGpuMinFaces) + " faces or more (smaller: cpu)";
+    automatic += ", for meshes of " + std::to_string(auto_gpu_min_faces(0)) + " faces or more (" +
+                 std::to_string(kAutoGpuMinFaces) + " per two CPU threads, here " +
+                 std::to_string(std::max(1u, std::thread::hardware_concurrency())) + "; smaller: cpu)";
   std::printf("\n--device auto: %s\n--device gpu:  %s\n", automatic.c_str(), choice_text("gpu", devices).c_str());
 }
 

@@ -102,7 +102,8 @@ InputMesh read_input(const std::string& path, bool weld, bool quiet, unsigned th
 void add_device_option(CLI::App* sub, std::string& device) {
   sub->add_option("--device", device,
                   "auto | cpu | gpu | gpu:N (default: $MESHCVT_DEVICE, else auto: a discrete or "
-                  "integrated GPU for meshes of a million faces or more, else the CPU engine, which "
+                  "integrated GPU for meshes of a million faces or more per two CPU threads (--threads, else "
+                  "every core), else the CPU engine, which "
                   "also takes over, with a note, if that GPU fails; gpu and gpu:N stop with the error)");
 }
 

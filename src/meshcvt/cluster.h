@@ -62,7 +62,8 @@ struct ClusterOptions {
   uint32_t lloyd_steps = 64;
   unsigned threads = 0;            ///< 0: every core. The result does not depend on it.
   uint64_t seed = 1;               ///< for Init::random
-  /// "auto", "cpu", "gpu" or "gpu:N". Empty: $MESHCVT_DEVICE, else "auto".
+  /// "auto", "cpu", "gpu" or "gpu:N". Empty: $MESHCVT_DEVICE, else "auto". "auto" takes a GPU only
+  /// for auto_gpu_min_faces(threads) faces or more (meshcvt/device.h: 1M per two threads).
   std::string device;
   /// When the GPU asked for cannot be had (no Vulkan loader, no such device, none usable) or its
   /// engine fails (a DeviceError: its setup, out of device memory, a lost device, a failed rule

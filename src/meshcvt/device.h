@@ -76,18 +76,27 @@ struct DeviceChoice {
 ///   other   -> OptionError listing the accepted forms (naming $MESHCVT_DEVICE when it came from there).
 DeviceChoice resolve_device(const std::string& request);
 
-/// Meshes with fewer faces than this take the CPU engine under "auto", without loading Vulkan.
-/// Why: a GPU run pays about 0.15 s for the Vulkan instance and device before it saves anything,
-/// while the initialization runs on the CPU either way. Measured with 16 CPU threads against an
-/// H100 / H200 (bench/RESULTS.md, "GPU engine"): 75k faces -> 10k clusters 0.17 / 0.09 s on the
-/// CPU engine, 0.31 / 0.20 s on the GPU; 1.2M faces about even; 4.8M faces 2.41 / 1.40 s against
-/// 2.27 / 1.46 s. With fewer CPU cores the GPU gains more, from about the same size up.
+/// Under "auto", the fewest faces for a GPU per two CPU threads of the CPU engine (and the fewest at
+/// one or two threads): auto_gpu_min_faces.
 constexpr size_t kAutoGpuMinFaces = 1000000;
 
-/// resolve_device(request) for a mesh of `faces` faces: as there, except that "auto" (also from
-/// $MESHCVT_DEVICE or "") takes the CPU engine for fewer than kAutoGpuMinFaces faces without
-/// probing for devices. "gpu" and "gpu:N" are taken as asked, whatever the size.
-DeviceChoice resolve_device_for_mesh(const std::string& request, size_t faces);
+/// The fewest faces for which "auto" takes a GPU when the CPU engine would run `threads` threads
+/// (0 = one per core): kAutoGpuMinFaces * max(1, threads / 2), e.g. 1M faces at 2 threads, 8M at 16.
+/// Why: a GPU run pays about 0.15-0.4 s for the Vulkan instance, the device and the uploads, and
+/// saves only part of the iterations, which the CPU engine spreads over its threads; the
+/// initialization, reading and writing cost the same on both. Measured on an H200 with `meshcvt
+/// cluster -n 10000`, whole command (bench/RESULTS.md, "GPU engine", thirty-eighth session): at 2
+/// threads the GPU was faster from 1.2M faces (1.30-1.41 s against 1.52-1.69 s), at 4 threads about
+/// even at 4.8M and slower at 1.2M, at 8 even at 4.8M and faster at 19.3M (14.6-15.0 s against
+/// 15.1-15.7 s), at 16 even at 4.8M and at 19.3M; 75k and 300k faces were slower on the GPU at
+/// every thread count (by 0.03-0.2 s).
+size_t auto_gpu_min_faces(unsigned threads);
+
+/// resolve_device(request) for a mesh of `faces` faces clustered on `threads` CPU threads (0 = one
+/// per core): as there, except that "auto" (also from $MESHCVT_DEVICE or "") takes the CPU engine
+/// for fewer than auto_gpu_min_faces(threads) faces without probing for devices. "gpu" and "gpu:N"
+/// are taken as asked, whatever the size.
+DeviceChoice resolve_device_for_mesh(const std::string& request, size_t faces, unsigned threads = 0);
 
 /// Same rule against a given device list (no Vulkan calls, except that "" still reads
 /// $MESHCVT_DEVICE). `devices` stands for the machine's list; used by `meshcvt devices` and tests.
