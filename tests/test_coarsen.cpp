@@ -239,10 +239,12 @@ bool has_defect(const std::vector<DualDefect>& defects, DualDefect::Kind kind, u
   return false;
 }
 
-CoarsenResult coarsen(const Labeled& l, uint32_t clusters, VertexPlacement placement = VertexPlacement::closest) {
+CoarsenResult coarsen(const Labeled& l, uint32_t clusters, VertexPlacement placement = VertexPlacement::closest,
+                      bool boundary_onto_input = true) {
   Topology topology = build_topology(l.mesh);
   CoarsenOptions options;
   options.placement = placement;
+  options.boundary_onto_input = boundary_onto_input;
   return coarsen_clustering(l.mesh, topology, l.labels, clusters, options);
 }
 
@@ -365,6 +367,132 @@ TEST_CASE("coarsen: a grid with a hole keeps two boundary loops, corners at the 
   CHECK(out.boundary.count({6u, 7u}) == 0);
 }
 
+// The coarse mesh of an engine clustering of grid g (n clusters), with or without the boundary
+// step; and what the tests below look at: its smallest angle (degrees), its triangles with an
+// angle below 30 degrees, and its vertices on the boundary edges.
+struct OpenCoarse {
+  CoarsenResult r;
+  double min_angle = 180;
+  uint64_t below_30 = 0;
+  std::vector<uint32_t> boundary_vertices;
+};
+OpenCoarse coarsen_open(const Labeled& g, uint32_t n, bool boundary_onto_input, unsigned threads = 0) {
+  Topology topology = build_topology(g.mesh);
+  ClusterOptions co;
+  co.clusters = n;
+  const Clustering c = cluster(g.mesh, topology, co);
+  CoarsenOptions options;
+  options.boundary_onto_input = boundary_onto_input;
+  options.threads = threads;
+  OpenCoarse out;
+  out.r = coarsen_clustering(g.mesh, topology, c.labels, n, options);
+  const Mesh& m = out.r.mesh;
+  std::map<std::pair<uint32_t, uint32_t>, int> uses;
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    const float* p[3];
+    for (int k = 0; k < 3; ++k) {
+      p[k] = &m.positions[3 * size_t(m.indices[3 * f + k])];
+      ++uses[std::minmax(m.indices[3 * f + k], m.indices[3 * f + (k + 1) % 3])];
+    }
+    for (int k = 0; k < 3; ++k) {
+      const float* a = p[k];
+      const float* b = p[(k + 1) % 3];
+      const float* c2 = p[(k + 2) % 3];
+      const double u[2] = {double(b[0]) - a[0], double(b[1]) - a[1]}, w[2] = {double(c2[0]) - a[0], double(c2[1]) - a[1]};
+      const double angle = std::atan2(std::fabs(u[0] * w[1] - u[1] * w[0]), u[0] * w[0] + u[1] * w[1]) * 180 / std::numbers::pi;
+      out.min_angle = std::min(out.min_angle, angle);
+    }
+  }
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    bool thin = false;
+    for (int k = 0; k < 3; ++k) {
+      const float* a = &m.positions[3 * size_t(m.indices[3 * f + k])];
+      const float* b = &m.positions[3 * size_t(m.indices[3 * f + (k + 1) % 3])];
+      const float* c2 = &m.positions[3 * size_t(m.indices[3 * f + (k + 2) % 3])];
+      const double u[2] = {double(b[0]) - a[0], double(b[1]) - a[1]}, w[2] = {double(c2[0]) - a[0], double(c2[1]) - a[1]};
+      thin = thin || std::atan2(std::fabs(u[0] * w[1] - u[1] * w[0]), u[0] * w[0] + u[1] * w[1]) < std::numbers::pi / 6;
+    }
+    out.below_30 += thin;
+  }
+  std::set<uint32_t> on_boundary;
+  for (const auto& [edge, count] : uses)
+    if (count == 1) on_boundary.insert({edge.first, edge.second});
+  out.boundary_vertices.assign(on_boundary.begin(), on_boundary.end());
+  return out;
+}
+
+TEST_CASE("coarsen: an open square's coarse boundary lies on its boundary and keeps its four corners") {
+  // 30 x 30 unit quads; the engine's clustering into 60.
+  Labeled g = grid(30, 30, [](int, int) { return 0u; });
+  const OpenCoarse on = coarsen_open(g, 60, true), off = coarsen_open(g, 60, false);
+  REQUIRE(on.r.defects.empty());
+  REQUIRE(off.r.defects.empty());
+  auto on_square = [](const float* p) {
+    return std::fabs(p[0]) < 1e-5 || std::fabs(p[0] - 30) < 1e-5 || std::fabs(p[1]) < 1e-5 || std::fabs(p[1] - 30) < 1e-5;
+  };
+  auto is_corner = [](const float* p) {
+    return (std::fabs(p[0]) < 1e-5 || std::fabs(p[0] - 30) < 1e-5) && (std::fabs(p[1]) < 1e-5 || std::fabs(p[1] - 30) < 1e-5);
+  };
+  auto count = [&](const OpenCoarse& c, auto&& test) {
+    int k = 0;
+    for (uint32_t v : c.boundary_vertices) k += test(&c.r.mesh.positions[3 * size_t(v)]);
+    return k;
+  };
+  // Each vertex of the coarse boundary on the square's, the corners among them.
+  CHECK(on.boundary_vertices.size() >= 8);
+  CHECK(count(on, on_square) == int(on.boundary_vertices.size()));
+  CHECK(count(on, is_corner) == 4);
+  CHECK(on.r.boundary_corners == 4);
+  CHECK(on.r.boundary_vertices_moved == on.boundary_vertices.size());
+  CHECK(on.r.boundary_left_inside == 0);
+  // Without the step the boundary runs inside and cuts the corners.
+  CHECK(count(off, on_square) < int(off.boundary_vertices.size()));
+  CHECK(count(off, is_corner) == 0);
+  CHECK(off.r.boundary_vertices_moved == 0);
+  // Same connectivity class, and the quality columns' limits kept.
+  CHECK(on.boundary_vertices.size() == off.boundary_vertices.size());
+  CHECK(on.min_angle >= std::min(off.min_angle, 30.0) - 1e-9);
+  CHECK(on.below_30 <= off.below_30);
+  // The same to the bit on one thread and on three.
+  const OpenCoarse one = coarsen_open(g, 60, true, 1), three = coarsen_open(g, 60, true, 3);
+  CHECK(one.r.mesh.positions == three.r.mesh.positions);
+  CHECK(one.r.mesh.indices == three.r.mesh.indices);
+  CHECK(one.r.mesh.positions == on.r.mesh.positions);
+}
+
+TEST_CASE("coarsen: the boundary step takes a hole's corners, and leaves a hole smaller than the triangles alone") {
+  // 30 x 30 quads with a 10 x 10 hole (a loop of 40 unit edges) and a 1 x 1 hole (4 unit edges);
+  // 60 clusters: coarse edges of about 4.
+  auto keep = [](int i, int j) { return !(i >= 10 && i < 20 && j >= 10 && j < 20) && !(i == 4 && j == 25); };
+  Labeled g = grid(30, 30, [](int, int) { return 0u; }, keep);
+  const Topology topology = build_topology(g.mesh);
+  CoarsenMeshOptions options;  // the whole job: the fix loop makes the clustering's dual clean
+  options.cluster.clusters = 60;
+  const CoarsenMeshResult job = coarsen_mesh(g.mesh, topology, options);
+  const CoarsenResult& r = job.coarse;
+  REQUIRE(r.defects.empty());
+  std::map<std::pair<uint32_t, uint32_t>, int> uses;
+  for (size_t f = 0; f < r.mesh.face_count(); ++f)
+    for (int k = 0; k < 3; ++k) ++uses[std::minmax(r.mesh.indices[3 * f + k], r.mesh.indices[3 * f + (k + 1) % 3])];
+  std::set<uint32_t> boundary_vertices;
+  for (const auto& [edge, count] : uses)
+    if (count == 1) boundary_vertices.insert({edge.first, edge.second});
+  int hole_corners = 0, on_big_hole = 0, on_small_hole = 0;
+  for (uint32_t v : boundary_vertices) {
+    const float* p = &r.mesh.positions[3 * size_t(v)];
+    const bool x_in = p[0] >= 10 - 1e-5 && p[0] <= 20 + 1e-5, y_in = p[1] >= 10 - 1e-5 && p[1] <= 20 + 1e-5;
+    const bool x_side = std::fabs(p[0] - 10) < 1e-5 || std::fabs(p[0] - 20) < 1e-5;
+    const bool y_side = std::fabs(p[1] - 10) < 1e-5 || std::fabs(p[1] - 20) < 1e-5;
+    on_big_hole += (x_side && y_in) || (y_side && x_in);
+    hole_corners += x_side && y_side;
+    on_small_hole += p[0] >= 4 - 1e-5 && p[0] <= 5 + 1e-5 && p[1] >= 25 - 1e-5 && p[1] <= 26 + 1e-5;
+  }
+  CHECK(hole_corners == 4);
+  CHECK(on_big_hole >= 4);
+  // The small hole's clusters keep their points: none on its rim.
+  CHECK(on_small_hole == 0);
+}
+
 TEST_CASE("coarsen: a block clustering of a torus keeps chi = 0") {
   Labeled t = torus(16, 12, [](int i, int j) { return uint32_t((j / 3) * 4 + i / 4); });
   CoarsenResult r = coarsen(t, 16);
@@ -408,7 +536,8 @@ TEST_CASE("coarsen: a quad corner is split along the diagonal that maximizes the
   // Rim points r_i with (r_i + r_{i+1}) / 3 = the rhombus corners (2,0), (0,1), (-2,0), (0,-1).
   std::vector<std::array<double, 2>> wide = {{3, -1.5}, {3, 1.5}, {-3, 1.5}, {-3, -1.5}};
   Labeled w = wheel(wide, 2);
-  CoarsenResult r = coarsen(w, 4, VertexPlacement::qem);
+  // (The rim is the wheel's boundary: the sectors' points stay where qem puts them.)
+  CoarsenResult r = coarsen(w, 4, VertexPlacement::qem, /*boundary_onto_input=*/false);
   REQUIRE(r.mesh.face_count() == 2);
   CHECK(std::fabs(r.mesh.positions[0] - 2.0f) < 1e-5f);  // sector 0's centroid
   CHECK(std::fabs(r.mesh.positions[4] - 1.0f) < 1e-5f);  // sector 1's
@@ -416,7 +545,7 @@ TEST_CASE("coarsen: a quad corner is split along the diagonal that maximizes the
   CHECK(!has_edge(r.mesh, 0, 2));
   // Numbering the sectors from the next one makes the other diagonal win: not a fixed fan.
   std::vector<std::array<double, 2>> shifted = {wide[1], wide[2], wide[3], wide[0]};
-  CoarsenResult rt = coarsen(wheel(shifted, 2), 4, VertexPlacement::qem);
+  CoarsenResult rt = coarsen(wheel(shifted, 2), 4, VertexPlacement::qem, /*boundary_onto_input=*/false);
   REQUIRE(rt.mesh.face_count() == 2);
   CHECK(has_edge(rt.mesh, 0, 2));
   CHECK(!has_edge(rt.mesh, 1, 3));

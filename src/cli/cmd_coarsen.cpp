@@ -32,7 +32,7 @@ struct CoarsenArgs {
   double fit_swap_angle = CoarsenOptions{}.fit_swap_min_angle_deg;
   double fit_min_angle = CoarsenOptions{}.fit_min_angle_deg;
   unsigned threads = 0;
-  bool quiet = false, no_weld = false, no_error = false, no_flips = false, no_fit_swaps = false;
+  bool quiet = false, no_weld = false, no_error = false, no_flips = false, no_fit_swaps = false, no_boundary_snap = false;
   double gradation = 0;   ///< --gradation g: curvature-adaptive density (meshcvt/density.h); 0 = uniform
   std::string subdivide;  ///< --subdivide auto|K: "" = the placement's default (subdivides_by_default)
   std::string split_edges = "auto";  ///< --split-edges auto|R (parse_split_edges)
@@ -124,6 +124,7 @@ void run_coarsen(const CoarsenArgs& a) {
   so.gradation = a.gradation;
   co.threads = a.threads;
   co.flip_edges = !a.no_flips;
+  co.boundary_onto_input = !a.no_boundary_snap;
   co.relax_passes = a.relax_passes;
   co.fit_passes = a.fit_passes;
   co.fit_swaps = !a.no_fit_swaps;
@@ -318,7 +319,9 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("fit_swaps", co.fit_swaps).value("fit_swap_min_angle_deg", co.fit_swap_min_angle_deg)
         .value("swapped_edges", r.swapped_edges).value("unfolded_vertices", r.unfolded_vertices)
         .value("fit_min_angle_deg", co.fit_min_angle_deg).value("angle_floor_moves", r.angle_floor_moves)
-        .value("surface_points", r.surface_points);
+        .value("surface_points", r.surface_points).value("boundary_snap", !a.no_boundary_snap)
+        .value("boundary_vertices_moved", r.boundary_vertices_moved).value("boundary_corners", r.boundary_corners)
+        .value("boundary_backed_off", r.boundary_backed_off).value("boundary_left_inside", r.boundary_left_inside);
     j.begin_array("jobs");
     for (const CoarsenSurfaceJob& sj : result.jobs)
       j.begin_object().value("surface", to_string(sj.surface)).value("defects", uint64_t(sj.defects))
@@ -382,6 +385,11 @@ void run_coarsen(const CoarsenArgs& a) {
     if (!a.no_error) std::printf("; Hausdorff %.3g%% of the diagonal, RMS %.3g%%", 100 * err.hausdorff_rel, 100 * err.rms_rel);
     std::printf("\n%s; %llu edges flipped, %llu vertex moves\n", fix_line.c_str(), (unsigned long long)r.flipped_edges,
                 (unsigned long long)r.relaxed_moves);
+    if (r.boundary_vertices_moved > 0)
+      std::printf("boundary: %llu vertices onto the input's boundary, %llu of them onto its corners\n",
+                  (unsigned long long)r.boundary_vertices_moved, (unsigned long long)r.boundary_corners);
+    else if (r.boundary_left_inside > 0)
+      std::printf("boundary: left inside the input's (onto it, its triangles would have had smaller angles)\n");
     std::printf("time: cluster %.3f s, fixes %.3f s, coarsen %.3f s; wrote %s\n", job.cluster_seconds,
                 job.fix_seconds, coarsen_s, a.output.c_str());
   }
@@ -428,6 +436,10 @@ const RegisterCommand reg(30, [](CLI::App& app) {
                   "with --vertex qem: degrees in [0, 60]; last, the corners of triangles with a smaller angle move "
                   "part of the way back to the surface until it is reached, where that widens them (default 20; 0 = off)");
   sub->add_flag("--no-flips", a->no_flips, "keep the dual's triangles as built (no edge flips improving angles)");
+  sub->add_flag("--no-boundary-snap", a->no_boundary_snap,
+                "open surfaces: leave the vertices of the clusters along the input's boundary where the placement puts "
+                "them, inside it (by default they go onto the boundary and its corners, where that costs no angle "
+                "below 30 degrees)");
   sub->add_flag("--no-weld", a->no_weld, "do not merge vertices with identical positions");
   sub->add_flag("--no-error", a->no_error, "skip measuring the distance to the input");
   sub->add_option("--labels", a->labels,
