@@ -48,6 +48,7 @@
 #include "coarse_fit.h"
 #include "coarse_toward_surface.h"
 #include "triangle_angle.h"
+#include "vec3.h"
 
 namespace meshcvt {
 
@@ -1003,17 +1004,23 @@ CoarsenResult build_dual(const Mesh& mesh, const Topology& topology, const std::
   return result;
 }
 
-// The coarse mesh's smallest angle (radians) and how many of its triangles have an angle below 30
-// degrees.
+// The coarse mesh's smallest angle (radians) and how many of its angles are below 30 degrees (as
+// the quality columns count them: a triangle may have two).
 void angle_summary(const Mesh& coarse, double& smallest, uint64_t& below_30) {
   smallest = std::numbers::pi;
   below_30 = 0;
   for (size_t t = 0; t < coarse.face_count(); ++t) {
     const float* p[3];
     for (int k = 0; k < 3; ++k) p[k] = &coarse.positions[3 * size_t(coarse.indices[3 * t + k])];
-    const double a = smallest_angle(p[0], p[1], p[2]);
-    smallest = std::min(smallest, a);
-    below_30 += a < std::numbers::pi / 6;
+    smallest = std::min(smallest, smallest_angle(p[0], p[1], p[2]));
+    for (int k = 0; k < 3; ++k) {
+      const float* o = p[k];
+      const float* x = p[(k + 1) % 3];
+      const float* y = p[(k + 2) % 3];
+      const Vec3 u = {double(x[0]) - o[0], double(x[1]) - o[1], double(x[2]) - o[2]};
+      const Vec3 w = {double(y[0]) - o[0], double(y[1]) - o[1], double(y[2]) - o[2]};
+      below_30 += std::atan2(length(cross(u, w)), dot(u, w)) < std::numbers::pi / 6;
+    }
   }
 }
 
@@ -1021,10 +1028,10 @@ void angle_summary(const Mesh& coarse, double& smallest, uint64_t& below_30) {
 // input's boundary go onto it (coarse_boundary.cpp), the other vertices relax around them again
 // (two passes, where relax runs), and those left with a triangle below 30 degrees go back toward
 // their placed points. All of it is undone when the coarse mesh's smallest angle then falls below
-// min(its value before, 30 degrees) or it has more triangles below 30 degrees than before: the
-// boundary is worth a lower Q, not the quality columns' limits (bench/RESULTS.md, thirty-eighth
-// session: over 91 coarsenings of 34 open libcgal-demo meshes, Hausdorff distance 74% lower on
-// geometric mean, ...).
+// min(its value before, 30 degrees) or it has more angles below 30 degrees than before: the
+// boundary is worth some Q avg, not the quality columns' limits (bench/RESULTS.md, "Coarsening:
+// open surfaces' boundaries": 26 of 84 coarsenings of the open libcgal-demo meshes came out as
+// without it, undone or with nothing to move).
 void put_boundary_onto_input(CoarsenResult& result, const Mesh& mesh, const Topology& topology,
                              const std::vector<uint32_t>& labels, const CoarsenOptions& options,
                              std::vector<uint32_t>& vertex_faces, bool flat_slivers) {

@@ -141,8 +141,8 @@ struct CoarsenOptions {
   /// Without it the coarse boundary runs inside the input's by about a third of a coarse edge and
   /// cuts its corners. Measured (bench/open_sweep.sh, bench/RESULTS.md) over 84 coarsenings of the
   /// 34 open libcgal-demo meshes: Hausdorff distance 10% or more lower in 50 (median ratio 0.74, at
-  /// worst 1.03x), RMS distance in 48 (median 0.86, at worst 1.08x), angles below 30 degrees 660 ->
-  /// 562 in all, mean Q avg 0.839 -> 0.830 (the boundary's triangles are taller: the clusters along
+  /// worst 1.03x), RMS distance in 47 (median 0.86, at worst 1.08x), angles below 30 degrees 660 ->
+  /// 561 in all, mean Q avg 0.839 -> 0.830 (the boundary's triangles are taller: the clusters along
   /// it are cut by it, and their neighbours stay over their own faces). Only when the dual has no
   /// defect.
   bool boundary_onto_input = true;
