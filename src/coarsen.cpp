@@ -33,7 +33,6 @@
 #include <atomic>
 #include <cassert>
 #include <cmath>
-#include <cstdlib>
 #include <numbers>
 #include <exception>
 #include <functional>
