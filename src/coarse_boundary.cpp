@@ -70,13 +70,6 @@ constexpr double kSlideSafeDeg = 35;
 // back toward its placed point.
 constexpr double kBackOffDeg = 30;
 
-Vec3 vertex_of(const Mesh& mesh, uint32_t v) { return mesh_vertex(mesh, v); }
-
-Vec3 coarse_point(const Mesh& coarse, uint32_t v) {
-  const float* p = &coarse.positions[3 * size_t(v)];
-  return {p[0], p[1], p[2]};
-}
-
 // The closest point of segment [a, b] to p.
 Vec3 closest_on_segment(Vec3 p, Vec3 a, Vec3 b) {
   const Vec3 ab = b - a;
@@ -102,7 +95,7 @@ RingShape shape_around(const Mesh& coarse, const std::vector<uint32_t>& ring_off
     Vec3 b[3], a[3];
     for (int k = 0; k < 3; ++k) {
       after[k] = t[k] == v ? q : &coarse.positions[3 * size_t(t[k])];
-      b[k] = coarse_point(coarse, t[k]);
+      b[k] = mesh_vertex(coarse, t[k]);
       a[k] = {after[k][0], after[k][1], after[k][2]};
     }
     const Vec3 m0 = cross(b[1] - b[0], b[2] - b[0]), m1 = cross(a[1] - a[0], a[2] - a[0]);
@@ -160,7 +153,7 @@ BoundarySnapCounts snap_boundary_vertices(Mesh& coarse, const Mesh& mesh, const 
   for (uint32_t v = 0; v < vertices; ++v) {
     if (leaving[v] == kNone) continue;
     const double window = 0.25 * std::sqrt(2.0 * cluster_area[labels[face_of(entering[v])]] / std::sqrt(3.0));
-    const Vec3 p = vertex_of(mesh, v);
+    const Vec3 p = mesh_vertex(mesh, v);
     uint32_t back = v, ahead = v, steps = 0;
     double back_length = 0, ahead_length = 0;
     bool wrapped = false;  // the two sides met: a loop within about two windows has no corner
@@ -168,19 +161,19 @@ BoundarySnapCounts snap_boundary_vertices(Mesh& coarse, const Mesh& mesh, const 
       ++steps;
       if (back_length < window) {
         const uint32_t w = tail(entering[back]);
-        back_length += length(vertex_of(mesh, back) - vertex_of(mesh, w));
+        back_length += length(mesh_vertex(mesh, back) - mesh_vertex(mesh, w));
         back = w;
         wrapped = wrapped || back == ahead || back == v;
       }
       if (ahead_length < window) {
         const uint32_t w = head(leaving[ahead]);
-        ahead_length += length(vertex_of(mesh, w) - vertex_of(mesh, ahead));
+        ahead_length += length(mesh_vertex(mesh, w) - mesh_vertex(mesh, ahead));
         ahead = w;
         wrapped = wrapped || ahead == back || ahead == v;
       }
     }
     reach[v] = steps;
-    const Vec3 in = p - vertex_of(mesh, back), out = vertex_of(mesh, ahead) - p;
+    const Vec3 in = p - mesh_vertex(mesh, back), out = mesh_vertex(mesh, ahead) - p;
     const double li = length(in), lo = length(out);
     if (wrapped || !(li > 0) || !(lo > 0)) continue;
     turn[v] = std::acos(std::clamp(dot(in, out) / (li * lo), -1.0, 1.0)) * 180 / std::numbers::pi;
@@ -226,7 +219,7 @@ BoundarySnapCounts snap_boundary_vertices(Mesh& coarse, const Mesh& mesh, const 
     for (uint32_t w = v; loop_of[w] == kNone;) {
       loop_of[w] = id;
       const uint32_t h = leaving[w], x = head(h);
-      total += length(vertex_of(mesh, x) - vertex_of(mesh, w));
+      total += length(mesh_vertex(mesh, x) - mesh_vertex(mesh, w));
       const uint32_t c = labels[face_of(h)];
       if (labels[face_of(entering[w])] != c) edges += std::sqrt(2.0 * cluster_area[c] / std::sqrt(3.0));
       w = x;
@@ -263,9 +256,9 @@ BoundarySnapCounts snap_boundary_vertices(Mesh& coarse, const Mesh& mesh, const 
   std::vector<Vec3> arc_points;
   for (uint32_t c = 0; c < n; ++c) {
     if (runs[c] == 1) {
-      arc_points.push_back(vertex_of(mesh, arc_first[c]));
+      arc_points.push_back(mesh_vertex(mesh, arc_first[c]));
       for (uint32_t h = run_start[c];; h = leaving[head(h)]) {
-        arc_points.push_back(vertex_of(mesh, head(h)));
+        arc_points.push_back(mesh_vertex(mesh, head(h)));
         if (head(h) == arc_last[c]) break;
       }
     }
@@ -312,7 +305,7 @@ BoundarySnapCounts snap_boundary_vertices(Mesh& coarse, const Mesh& mesh, const 
   std::vector<uint8_t> on_arc(n, 0);  // 1: on its arc and free to slide along it; 2: on a corner
   auto try_corner = [&](uint32_t c, uint32_t v) {
     float q[3];
-    to_float(vertex_of(mesh, v), q);
+    to_float(mesh_vertex(mesh, v), q);
     if (!ring_shape(c, q, kMaxTurnDeg).valid) return false;
     store(c, q);
     on_arc[c] = 2;
@@ -330,8 +323,8 @@ BoundarySnapCounts snap_boundary_vertices(Mesh& coarse, const Mesh& mesh, const 
             [&](uint32_t a, uint32_t b) { return turn[a] != turn[b] ? turn[a] > turn[b] : a < b; });
   for (uint32_t v : junctions) {
     uint32_t first = labels[face_of(entering[v])], second = labels[face_of(leaving[v])];
-    const Vec3 p = vertex_of(mesh, v);
-    const Vec3 d0 = coarse_point(coarse, first) - p, d1 = coarse_point(coarse, second) - p;
+    const Vec3 p = mesh_vertex(mesh, v);
+    const Vec3 d0 = mesh_vertex(coarse, first) - p, d1 = mesh_vertex(coarse, second) - p;
     if (dot(d1, d1) < dot(d0, d0)) std::swap(first, second);
     if (!(free_cluster(first) && try_corner(first, v)) && free_cluster(second)) try_corner(second, v);
   }
@@ -339,7 +332,7 @@ BoundarySnapCounts snap_boundary_vertices(Mesh& coarse, const Mesh& mesh, const 
     if (!free_cluster(c)) continue;
     double along;
     float q[3];
-    to_float(closest_on_arc(c, coarse_point(coarse, c), along), q);
+    to_float(closest_on_arc(c, mesh_vertex(coarse, c), along), q);
     if (ring_shape(c, q, kMaxTurnDeg).valid) {
       store(c, q);
       on_arc[c] = 1;
@@ -381,8 +374,8 @@ BoundarySnapCounts snap_boundary_vertices(Mesh& coarse, const Mesh& mesh, const 
                              coarse.positions[3 * size_t(c) + 2]};
       const RingShape old_shape = ring_shape(c, here, 180);
       double at, goal;
-      closest_on_arc(c, coarse_point(coarse, c), at);
-      closest_on_arc(c, 0.5 * (coarse_point(coarse, next) + coarse_point(coarse, previous)), goal);
+      closest_on_arc(c, mesh_vertex(coarse, c), at);
+      closest_on_arc(c, 0.5 * (mesh_vertex(coarse, next) + mesh_vertex(coarse, previous)), goal);
       for (double fraction : {1.0, 0.5, 0.25}) {
         float q[3];
         to_float(arc_point_at(c, at + fraction * (goal - at)), q);
@@ -414,7 +407,7 @@ uint64_t back_off_boundary_vertices(Mesh& coarse, const std::vector<float>& plac
     const float* here = &coarse.positions[3 * size_t(v)];
     const RingShape now = shape_around(coarse, ring_offsets, ring, v, here, 180);
     if (!(now.min_angle < kBackOff)) continue;
-    const Vec3 from = coarse_point(coarse, v), to = {placed[3 * size_t(v)], placed[3 * size_t(v) + 1], placed[3 * size_t(v) + 2]};
+    const Vec3 from = mesh_vertex(coarse, v), to = {placed[3 * size_t(v)], placed[3 * size_t(v) + 1], placed[3 * size_t(v) + 2]};
     float best[3] = {here[0], here[1], here[2]};
     double best_angle = now.min_angle;
     for (double t : {0.25, 0.5, 0.75, 1.0}) {

@@ -43,11 +43,11 @@
 
 #include "meshcvt/coarsen.h"
 #include "meshcvt/error.h"
+#include "meshcvt/quality.h"
 #include "coarse_boundary.h"
 #include "coarse_fit.h"
 #include "coarse_toward_surface.h"
 #include "triangle_angle.h"
-#include "vec3.h"
 
 namespace meshcvt {
 
@@ -1003,26 +1003,6 @@ CoarsenResult build_dual(const Mesh& mesh, const Topology& topology, const std::
   return result;
 }
 
-// The coarse mesh's smallest angle (radians) and how many of its angles are below 30 degrees (as
-// the quality columns count them: a triangle may have two).
-void angle_summary(const Mesh& coarse, double& smallest, uint64_t& below_30) {
-  smallest = std::numbers::pi;
-  below_30 = 0;
-  for (size_t t = 0; t < coarse.face_count(); ++t) {
-    const float* p[3];
-    for (int k = 0; k < 3; ++k) p[k] = &coarse.positions[3 * size_t(coarse.indices[3 * t + k])];
-    smallest = std::min(smallest, smallest_angle(p[0], p[1], p[2]));
-    for (int k = 0; k < 3; ++k) {
-      const float* o = p[k];
-      const float* x = p[(k + 1) % 3];
-      const float* y = p[(k + 2) % 3];
-      const Vec3 u = {double(x[0]) - o[0], double(x[1]) - o[1], double(x[2]) - o[2]};
-      const Vec3 w = {double(y[0]) - o[0], double(y[1]) - o[1], double(y[2]) - o[2]};
-      below_30 += std::atan2(length(cross(u, w)), dot(u, w)) < std::numbers::pi / 6;
-    }
-  }
-}
-
 // CoarsenOptions::boundary_onto_input, after the relax: the vertices of the clusters along the
 // input's boundary go onto it (coarse_boundary.cpp), the other vertices relax around them again
 // (two passes, where relax runs), and those left with a triangle below 30 degrees go back toward
@@ -1034,9 +1014,7 @@ void angle_summary(const Mesh& coarse, double& smallest, uint64_t& below_30) {
 void put_boundary_onto_input(CoarsenResult& result, const Mesh& mesh, const Topology& topology,
                              const std::vector<uint32_t>& labels, const CoarsenOptions& options,
                              std::vector<uint32_t>& vertex_faces, bool flat_slivers) {
-  double smallest_before;
-  uint64_t below_before;
-  angle_summary(result.mesh, smallest_before, below_before);
+  const TriangleQuality quality_before = triangle_quality(result.mesh);
   Mesh before = result.mesh;
   std::vector<float> placed;
   std::vector<uint8_t> moved;
@@ -1053,10 +1031,9 @@ void put_boundary_onto_input(CoarsenResult& result, const Mesh& mesh, const Topo
   backed_off = detail::back_off_boundary_vertices(result.mesh, placed, moved);
   if (backed_off > 0 && options.flip_edges)
     flipped += flip_coarse_edges(result.mesh, options.flip_max_dihedral_deg, /*max_passes=*/8, flat_slivers);
-  double smallest_after;
-  uint64_t below_after;
-  angle_summary(result.mesh, smallest_after, below_after);
-  if (smallest_after < std::min(smallest_before, std::numbers::pi / 6) || below_after > below_before) {
+  const TriangleQuality quality_after = triangle_quality(result.mesh);  // (the report's columns)
+  if (quality_after.min_angle_deg < std::min(quality_before.min_angle_deg, 30.0) ||
+      quality_after.angles_below_30 > quality_before.angles_below_30) {
     result.mesh = std::move(before);
     result.boundary_left_inside = snapped.moved;
     return;

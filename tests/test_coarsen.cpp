@@ -368,8 +368,19 @@ TEST_CASE("coarsen: a grid with a hole keeps two boundary loops, corners at the 
 }
 
 // The coarse mesh of an engine clustering of grid g (n clusters), with or without the boundary
-// step; and what the tests below look at: its smallest angle (degrees), its triangles with an
-// angle below 30 degrees, and its vertices on the boundary edges.
+// step; and what the tests below look at: its smallest angle (degrees), its angles below 30
+// degrees, and its vertices on the boundary edges.
+// The vertices of the edges of one triangle.
+std::set<uint32_t> boundary_vertex_set(const Mesh& m) {
+  std::map<std::pair<uint32_t, uint32_t>, int> uses;
+  for (size_t f = 0; f < m.face_count(); ++f)
+    for (int k = 0; k < 3; ++k) ++uses[std::minmax(m.indices[3 * f + k], m.indices[3 * f + (k + 1) % 3])];
+  std::set<uint32_t> on_boundary;
+  for (const auto& [edge, count] : uses)
+    if (count == 1) on_boundary.insert({edge.first, edge.second});
+  return on_boundary;
+}
+
 struct OpenCoarse {
   CoarsenResult r;
   double min_angle = 180;
@@ -387,36 +398,10 @@ OpenCoarse coarsen_open(const Labeled& g, uint32_t n, bool boundary_onto_input, 
   OpenCoarse out;
   out.r = coarsen_clustering(g.mesh, topology, c.labels, n, options);
   const Mesh& m = out.r.mesh;
-  std::map<std::pair<uint32_t, uint32_t>, int> uses;
-  for (size_t f = 0; f < m.face_count(); ++f) {
-    const float* p[3];
-    for (int k = 0; k < 3; ++k) {
-      p[k] = &m.positions[3 * size_t(m.indices[3 * f + k])];
-      ++uses[std::minmax(m.indices[3 * f + k], m.indices[3 * f + (k + 1) % 3])];
-    }
-    for (int k = 0; k < 3; ++k) {
-      const float* a = p[k];
-      const float* b = p[(k + 1) % 3];
-      const float* c2 = p[(k + 2) % 3];
-      const double u[2] = {double(b[0]) - a[0], double(b[1]) - a[1]}, w[2] = {double(c2[0]) - a[0], double(c2[1]) - a[1]};
-      const double angle = std::atan2(std::fabs(u[0] * w[1] - u[1] * w[0]), u[0] * w[0] + u[1] * w[1]) * 180 / std::numbers::pi;
-      out.min_angle = std::min(out.min_angle, angle);
-    }
-  }
-  for (size_t f = 0; f < m.face_count(); ++f) {
-    bool thin = false;
-    for (int k = 0; k < 3; ++k) {
-      const float* a = &m.positions[3 * size_t(m.indices[3 * f + k])];
-      const float* b = &m.positions[3 * size_t(m.indices[3 * f + (k + 1) % 3])];
-      const float* c2 = &m.positions[3 * size_t(m.indices[3 * f + (k + 2) % 3])];
-      const double u[2] = {double(b[0]) - a[0], double(b[1]) - a[1]}, w[2] = {double(c2[0]) - a[0], double(c2[1]) - a[1]};
-      thin = thin || std::atan2(std::fabs(u[0] * w[1] - u[1] * w[0]), u[0] * w[0] + u[1] * w[1]) < std::numbers::pi / 6;
-    }
-    out.below_30 += thin;
-  }
-  std::set<uint32_t> on_boundary;
-  for (const auto& [edge, count] : uses)
-    if (count == 1) on_boundary.insert({edge.first, edge.second});
+  const TriangleQuality q = triangle_quality(m);
+  out.min_angle = q.min_angle_deg;
+  out.below_30 = q.angles_below_30;
+  const std::set<uint32_t> on_boundary = boundary_vertex_set(m);
   out.boundary_vertices.assign(on_boundary.begin(), on_boundary.end());
   return out;
 }
@@ -471,12 +456,7 @@ TEST_CASE("coarsen: the boundary step takes a hole's corners, and leaves a hole 
   const CoarsenMeshResult job = coarsen_mesh(g.mesh, topology, options);
   const CoarsenResult& r = job.coarse;
   REQUIRE(r.defects.empty());
-  std::map<std::pair<uint32_t, uint32_t>, int> uses;
-  for (size_t f = 0; f < r.mesh.face_count(); ++f)
-    for (int k = 0; k < 3; ++k) ++uses[std::minmax(r.mesh.indices[3 * f + k], r.mesh.indices[3 * f + (k + 1) % 3])];
-  std::set<uint32_t> boundary_vertices;
-  for (const auto& [edge, count] : uses)
-    if (count == 1) boundary_vertices.insert({edge.first, edge.second});
+  const std::set<uint32_t> boundary_vertices = boundary_vertex_set(r.mesh);
   int hole_corners = 0, on_big_hole = 0, on_small_hole = 0;
   for (uint32_t v : boundary_vertices) {
     const float* p = &r.mesh.positions[3 * size_t(v)];
