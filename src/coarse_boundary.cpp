@@ -337,8 +337,6 @@ BoundarySnapCounts snap_boundary_vertices(Mesh& coarse, const Mesh& mesh, const 
       store(c, q);
       on_arc[c] = 1;
       ++counts.moved;
-    } else {
-      ++counts.refused;
     }
   }
 
@@ -388,7 +386,6 @@ BoundarySnapCounts snap_boundary_vertices(Mesh& coarse, const Mesh& mesh, const 
         break;
       }
     }
-    counts.slides += slid;
     if (slid == 0) break;
   }
   for (uint32_t c = 0; c < n; ++c) moved[c] = on_arc[c];

@@ -14,31 +14,30 @@ namespace meshcvt::detail {
 struct BoundarySnapCounts {
   uint64_t moved = 0;    ///< coarse vertices moved onto the input's boundary (corners included)
   uint64_t corners = 0;  ///< of them, onto a corner of a boundary loop
-  uint64_t refused = 0;  ///< clusters on the boundary whose vertex stayed (the move would fold a triangle)
-  uint64_t slides = 0;   ///< moves along the boundary that improved the triangles (a vertex may slide in several passes)
 };
 
 /// Moves the vertex of each cluster that meets the input's boundary in one arc onto that arc: onto
 /// the sharpest corner of the loop there, if the arc holds one, else onto the arc's closest point
-/// to where the vertex is. See coarse_boundary.cpp for the corners and the check on each move.
+/// to where the vertex is; then slides the vertices off corners along their arcs where that
+/// improves their triangles. Loops whose arcs are short against their clusters' coarse edges are
+/// left alone. See coarse_boundary.cpp for the corners and the checks on each move.
 ///
 /// Inputs: coarse, the dual of (mesh, labels) without defects (vertex i is cluster i); topology of
 ///         mesh. Nothing moves when the input has non-manifold edges or vertices, faces with a
 ///         repeated corner, or inconsistently oriented neighbours (the loops' order is then not
 ///         the faces' orientation).
-/// Output: coarse's positions (vertices off the boundary, connectivity and orientation unchanged);
-///         the counts.
-/// placed: coarse's positions before (3 per vertex); moved: per vertex 1 put onto the boundary, 2
-/// onto a corner of it, else 0.
+/// Output: coarse's positions (the other vertices, connectivity and orientation unchanged); the
+///         counts; placed: coarse's positions before (3 per vertex); moved: per vertex 1 put onto
+///         the boundary, 2 onto a corner of it, else 0.
 BoundarySnapCounts snap_boundary_vertices(Mesh& coarse, const Mesh& mesh, const Topology& topology,
                                           const std::vector<uint32_t>& labels, std::vector<float>& placed,
                                           std::vector<uint8_t>& moved);
 
-/// Later (after relax): each vertex moved onto the boundary (not a corner: those stay) whose
-/// triangles' smallest angle is below 30 degrees
-/// goes back toward its `placed` point, as far as lifts that angle to 30 degrees (a quarter, half,
-/// three quarters or all of the way), or else the step that lifts it most; none where none does.
-/// Returns how many moved.
+/// Later (after relax): each vertex put onto the boundary (not onto a corner: those stay) whose
+/// triangles' smallest angle is below 30 degrees goes back toward its `placed` point, as far as
+/// lifts that angle to 30 degrees (a quarter, half, three quarters or all of the way), or else by
+/// the step that lifts it most; not at all where none does or a triangle would turn by more than
+/// 20 degrees. Returns how many moved.
 uint64_t back_off_boundary_vertices(Mesh& coarse, const std::vector<float>& placed, const std::vector<uint8_t>& moved);
 
 }  // namespace meshcvt::detail
