@@ -137,7 +137,7 @@ struct CoarsenOptions {
   /// Then two more relax passes (at most relax_passes), and a vertex left with a triangle below
   /// 30 degrees goes back toward its placed point (corners stay). All of it is undone when the
   /// coarse mesh's smallest angle ends below min(its value before, 30 degrees) or more of its
-  /// triangles have an angle below 30 degrees (CoarsenResult::boundary_left_inside).
+  /// angles are below 30 degrees (the report's columns; CoarsenResult::boundary_left_inside).
   /// Without it the coarse boundary runs inside the input's by about a third of a coarse edge and
   /// cuts its corners. Measured (bench/open_sweep.sh, bench/RESULTS.md) over 84 coarsenings of the
   /// 34 open libcgal-demo meshes: Hausdorff distance 10% or more lower in 50 (median ratio 0.74, at
