@@ -111,10 +111,8 @@ RingShape shape_around(const Mesh& coarse, const std::vector<uint32_t>& ring_off
 }  // namespace
 
 BoundarySnapCounts snap_boundary_vertices(Mesh& coarse, const Mesh& mesh, const Topology& topology,
-                                          const std::vector<uint32_t>& labels, std::vector<float>& placed,
-                                          std::vector<uint8_t>& moved) {
+                                          const std::vector<uint32_t>& labels, std::vector<uint8_t>& moved) {
   BoundarySnapCounts counts;
-  placed = coarse.positions;
   moved.assign(coarse.vertex_count(), 0);
   const size_t faces = mesh.face_count(), n = coarse.vertex_count(), vertices = mesh.vertex_count();
   if (topology.boundary_edges == 0 || topology.nonmanifold_edges > 0 || topology.nonmanifold_vertices > 0 ||

@@ -27,17 +27,16 @@ struct BoundarySnapCounts {
 ///         repeated corner, or inconsistently oriented neighbours (the loops' order is then not
 ///         the faces' orientation).
 /// Output: coarse's positions (the other vertices, connectivity and orientation unchanged); the
-///         counts; placed: coarse's positions before (3 per vertex); moved: per vertex 1 put onto
-///         the boundary, 2 onto a corner of it, else 0.
+///         counts; moved: per vertex 1 put onto the boundary, 2 onto a corner of it, else 0.
 BoundarySnapCounts snap_boundary_vertices(Mesh& coarse, const Mesh& mesh, const Topology& topology,
-                                          const std::vector<uint32_t>& labels, std::vector<float>& placed,
-                                          std::vector<uint8_t>& moved);
+                                          const std::vector<uint32_t>& labels, std::vector<uint8_t>& moved);
 
 /// Later (after relax): each vertex put onto the boundary (not onto a corner: those stay) whose
-/// triangles' smallest angle is below 30 degrees goes back toward its `placed` point, as far as
-/// lifts that angle to 30 degrees (a quarter, half, three quarters or all of the way), or else by
-/// the step that lifts it most; not at all where none does or a triangle would turn by more than
-/// 20 degrees. Returns how many moved.
+/// triangles' smallest angle is below 30 degrees goes back toward its `placed` point (coarse's
+/// positions before snap_boundary_vertices, 3 per vertex), as far as lifts that angle to 30
+/// degrees (a quarter, half, three quarters or all of the way), or else by the step that lifts it
+/// most; not at all where none does or a triangle would turn by more than 20 degrees. Returns how
+/// many moved.
 uint64_t back_off_boundary_vertices(Mesh& coarse, const std::vector<float>& placed, const std::vector<uint8_t>& moved);
 
 }  // namespace meshcvt::detail

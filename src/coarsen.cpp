@@ -1014,12 +1014,11 @@ CoarsenResult build_dual(const Mesh& mesh, const Topology& topology, const std::
 void put_boundary_onto_input(CoarsenResult& result, const Mesh& mesh, const Topology& topology,
                              const std::vector<uint32_t>& labels, const CoarsenOptions& options,
                              std::vector<uint32_t>& vertex_faces, bool flat_slivers) {
-  const TriangleQuality quality_before = triangle_quality(result.mesh);
-  Mesh before = result.mesh;
-  std::vector<float> placed;
+  Mesh before = result.mesh;  // what an undo restores, and the points the back-off returns toward
   std::vector<uint8_t> moved;
-  const detail::BoundarySnapCounts snapped = detail::snap_boundary_vertices(result.mesh, mesh, topology, labels, placed, moved);
+  const detail::BoundarySnapCounts snapped = detail::snap_boundary_vertices(result.mesh, mesh, topology, labels, moved);
   if (snapped.moved == 0) return;
+  const TriangleQuality quality_before = triangle_quality(before);
   uint64_t relaxed = 0, flipped = 0, backed_off = 0;
   const uint32_t again = std::min(options.relax_passes, kBoundaryRelaxPasses);
   if (again > 0) {
@@ -1028,7 +1027,7 @@ void put_boundary_onto_input(CoarsenResult& result, const Mesh& mesh, const Topo
     if (options.flip_edges)
       flipped += flip_coarse_edges(result.mesh, options.flip_max_dihedral_deg, /*max_passes=*/8, flat_slivers);
   }
-  backed_off = detail::back_off_boundary_vertices(result.mesh, placed, moved);
+  backed_off = detail::back_off_boundary_vertices(result.mesh, before.positions, moved);
   if (backed_off > 0 && options.flip_edges)
     flipped += flip_coarse_edges(result.mesh, options.flip_max_dihedral_deg, /*max_passes=*/8, flat_slivers);
   const TriangleQuality quality_after = triangle_quality(result.mesh);  // (the report's columns)
