@@ -17,8 +17,11 @@
 #include <thread>
 #include <vector>
 
+#include "meshcvt/cluster.h"
 #include "meshcvt/device.h"
 #include "meshcvt/error.h"
+#include "meshcvt/topology.h"
+#include "test_meshes.h"
 #include "gpu_test_device.h"
 #include "vk_buffer.h"
 #include "vk_context.h"
@@ -186,6 +189,34 @@ TEST_CASE("resolve_device_for_mesh: auto keeps meshes below a million faces per 
     CHECK_FALSE(resolve_device_for_mesh("auto", 4 * kAutoGpuMinFaces, 2).notice.empty());
     CHECK_FALSE(resolve_device_for_mesh("auto", auto_gpu_min_faces(0)).notice.empty());
   }
+}
+
+TEST_CASE("cluster: auto weighs the mesh against the thread count it is given") {
+  // cluster() must pass ClusterOptions::threads to the device choice: a mesh of a million faces
+  // is a GPU's size at two threads and not at four. Probing is forced and the loader does not
+  // exist, so a probe shows as the CPU fallback's notice and no GPU is needed; the clustering
+  // runs on the CPU either way (no iterations: only the choice is under test).
+  ScopedEnv probe("MESHCVT_PROBE_VULKAN", "1");
+  ScopedEnv loader("MESHCVT_VULKAN_LIBRARY", "/nonexistent/libvulkan.so.1");
+  ScopedEnv no_default("MESHCVT_DEVICE", nullptr);
+  if (vk::vulkan_loaded()) return;  // a loader already in this process would make the probe succeed
+  const Mesh mesh = test::grid(708, 708);
+  REQUIRE(mesh.face_count() >= auto_gpu_min_faces(2));
+  REQUIRE(mesh.face_count() < auto_gpu_min_faces(4));
+  const Topology topology = build_topology(mesh);
+  ClusterOptions options;
+  options.clusters = 8;
+  options.max_iterations = 0;
+  options.device = "auto";
+  options.threads = 4;
+  const Clustering four = cluster(mesh, topology, options);
+  CHECK(four.device_notice.empty());  // below four threads' size: not probed
+  CHECK(four.device.rfind("cpu", 0) == 0);
+  options.threads = 2;
+  const Clustering two = cluster(mesh, topology, options);
+  CHECK(two.device_notice.find("CPU engine") != std::string::npos);  // probed, and no loader
+  CHECK(two.device.rfind("cpu", 0) == 0);
+  CHECK(two.labels == four.labels);
 }
 
 TEST_CASE("resolve_device: ranking and auto fallback") {
