@@ -4,22 +4,22 @@
 // read buffers, the topology, the clustering's per-face arrays) and touches each page once as it
 // fills them. With 4 KiB pages that is a page fault per 4 KiB; on a virtual machine whose page
 // faults are slow, they were most of the reading, the topology and the subdivision (the 4.8M-face
-// bunny -> 10k on the 2-core VM: 368k minor faults and 7.6-9.4 s; with this file 78k and 4.4-4.8 s,
-// the same output; bench/RESULTS.md). Linux backs a range with huge pages only where the system allows
-// it (`/sys/kernel/mm/transparent_hugepage/enabled`: "always", or "madvise" and the
-// range asked for it with madvise(MADV_HUGEPAGE)). The VM's kernel says "madvise" (its build
+// bunny -> 10k on the 2-core VM: 368k minor faults and 7.6 s; with this file 78k and 4.5-4.8 s,
+// the same output; bench/RESULTS.md, "Table 1"). Linux backs a range with huge pages only where
+// the system allows it (/sys/kernel/mm/transparent_hugepage/enabled: "always", or "madvise" and
+// the range asked for it with madvise(MADV_HUGEPAGE)). The VM's kernel says "madvise" (its build
 // default), and glibc's malloc asks only when GLIBC_TUNABLES sets glibc.malloc.hugetlb=1.
 //
 // So the CLI's global operator new takes every block of kHugeBlockBytes or more at a huge page's
 // boundary and asks for huge pages for it, before anything touches it (a vector's storage is
 // allocated, then filled). The block still comes from malloc (posix_memalign) and goes back with
-// free, so nothing else changes: the advice is a hint, and where the system says
-// "never" (or the call fails) the block is used as it is. MESHCVT_HUGE_PAGES=0 turns it off (with
-// "madvise" defrag a fault in an advised range may wait for the kernel to compact memory).
-// Smaller blocks (the hierarchy's per-part arrays) stay on small pages: GLIBC_TUNABLES=
-// glibc.malloc.hugetlb=1 advises all of malloc's memory instead (57k faults, 4.3 s above).
-// Only the executable does this; the library leaves its callers' allocator alone (README). Sanitizer
-// builds keep their own operator new.
+// free, so nothing else changes: the advice is a hint, and where the system says "never" (or the
+// call fails) the block is used as it is. MESHCVT_HUGE_PAGES=0 turns it off (with "madvise"
+// defrag, a fault in an advised range may wait for the kernel to compact memory). Smaller blocks
+// (the hierarchy's per-part arrays) stay on small pages; GLIBC_TUNABLES=glibc.malloc.hugetlb=1
+// advises all of malloc's memory instead (57k faults, 4.3 s above). Only the executable does
+// this: the library leaves its callers' allocator alone (README). Sanitizer builds keep their own
+// operator new.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -30,8 +30,7 @@
 
 namespace {
 
-// Blocks below this are left alone: a huge page is 2 MiB, and advice on a smaller block could only
-// cover pages it shares with other blocks.
+// Blocks smaller than a huge page (2 MiB) are left alone: they cannot fill one.
 constexpr std::size_t kHugeBlockBytes = std::size_t(2) << 20;
 constexpr std::uintptr_t kHugePageBytes = std::uintptr_t(2) << 20;
 
@@ -63,7 +62,8 @@ bool huge_pages_wanted() {
 void* operator new(std::size_t bytes) {
   void* block;
   const bool huge = bytes >= kHugeBlockBytes && huge_pages_wanted();
-  while (!(block = huge ? aligned_block(bytes) : std::malloc(bytes == 0 ? 1 : bytes))) {  // as the standard's: the new-handler, else bad_alloc
+  // As the standard's: on failure the new-handler, else bad_alloc.
+  while (!(block = huge ? aligned_block(bytes) : std::malloc(bytes == 0 ? 1 : bytes))) {
     const std::new_handler handler = std::get_new_handler();
     if (!handler) throw std::bad_alloc();
     handler();
