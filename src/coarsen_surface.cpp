@@ -267,6 +267,18 @@ double seconds_of(const JobRun& run) {
          run.job.coarsen_seconds;
 }
 
+// What the report lists of a job (kept: as the first job, until another is better).
+CoarsenSurfaceJob job_record(const JobRun& run, CoarsenSurfaceJob::Surface surface) {
+  CoarsenSurfaceJob record;
+  record.surface = surface;
+  record.faces = run.surface.face_count();
+  record.initial_defects = run.job.initial_defects;
+  record.defects = run.job.coarse.defects.size();
+  record.seconds = seconds_of(run);
+  record.kept = true;
+  return record;
+}
+
 // The components of a job's surface that hold a cluster a defect names, as faces of the mesh the
 // surface was split from (parent: split face -> face of that mesh). A split keeps components (the
 // pieces of two faces that share an edge share its pieces), so the marked faces are whole
@@ -454,10 +466,10 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
   JobRun as_given;  // the input as given's job, where it ran after a split and was not kept
   auto keep_if_better = [&](JobRun&& other, CoarsenSurfaceJob::Surface surface) {
     if (result.jobs.empty())
-      result.jobs.push_back({result.split_edges > 0 ? CoarsenSurfaceJob::split : CoarsenSurfaceJob::as_given,
-                             run.job.coarse.defects.size(), seconds_of(run), true});
+      result.jobs.push_back(job_record(run, result.split_edges > 0 ? CoarsenSurfaceJob::split : CoarsenSurfaceJob::as_given));
     const bool better = other.job.coarse.defects.size() < run.job.coarse.defects.size();
-    result.jobs.push_back({surface, other.job.coarse.defects.size(), seconds_of(other), better});
+    result.jobs.push_back(job_record(other, surface));
+    result.jobs.back().kept = better;
     if (!better) return false;
     for (size_t i = 0; i + 1 < result.jobs.size(); ++i) result.jobs[i].kept = false;
     run = std::move(other);

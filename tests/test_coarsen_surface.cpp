@@ -248,6 +248,13 @@ TEST_CASE("coarsen_surface: where the split surface keeps defects, the input as 
   CHECK(chosen.jobs[0].surface == CoarsenSurfaceJob::split);
   CHECK(chosen.jobs[1].surface == CoarsenSurfaceJob::as_given);
   CHECK(chosen.jobs[1].kept);
+  // Each job's surface and first defects: what the split made, and (no fix rounds) its defects.
+  CHECK(chosen.jobs[0].faces == split.surface.face_count());
+  CHECK(chosen.jobs[1].faces == stretched.face_count());
+  CHECK(chosen.jobs[0].faces > chosen.jobs[1].faces);
+  CHECK(chosen.jobs[0].initial_defects == split.job.initial_defects);
+  CHECK(chosen.jobs[0].initial_defects == chosen.jobs[0].defects);
+  CHECK(chosen.jobs[1].initial_defects == as_given.job.initial_defects);
   CHECK(chosen.unsplit_components == 0);
   CHECK(chosen.split_edges == 0);
   CHECK(chosen.split_ratio == 0);

@@ -324,7 +324,8 @@ void run_coarsen(const CoarsenArgs& a) {
         .value("boundary_backed_off", r.boundary_backed_off).value("boundary_left_inside", r.boundary_left_inside);
     j.begin_array("jobs");
     for (const CoarsenSurfaceJob& sj : result.jobs)
-      j.begin_object().value("surface", to_string(sj.surface)).value("defects", uint64_t(sj.defects))
+      j.begin_object().value("surface", to_string(sj.surface)).value("faces", uint64_t(sj.faces))
+          .value("initial_defects", uint64_t(sj.initial_defects)).value("defects", uint64_t(sj.defects))
           .value("seconds", sj.seconds).value("kept", sj.kept).end_object();
     j.end_array();
     j.begin_array("defects");

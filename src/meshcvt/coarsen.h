@@ -596,7 +596,9 @@ struct CoarsenSurfaceJob {
     subdivided,    ///< the surface as given (the kept one where that job did not run), subdivided once
   };
   Surface surface = split;
-  size_t defects = 0;  ///< of its coarse mesh
+  size_t faces = 0;            ///< of its surface (as clustered)
+  size_t initial_defects = 0;  ///< of its first coarse mesh, before the fix loop
+  size_t defects = 0;          ///< of its coarse mesh
   double seconds = 0;  ///< locality order, clustering, fixes, coarse mesh
   bool kept = false;
 };

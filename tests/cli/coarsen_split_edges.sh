@@ -125,6 +125,11 @@ r = json.load(open(sys.argv[1]))
 jobs = r['jobs']
 assert [j['surface'] for j in jobs] == ['split', 'partly_split'], jobs
 assert jobs[0]['defects'] > 0 and not jobs[0]['kept'] and jobs[1]['kept'] and jobs[1]['defects'] == 0, jobs
+# The fix loop starts from each job's first defects and ends at or below them; the partly split
+# surface (the strip as given) has fewer faces than the split one, and it is the one kept.
+assert all(j['initial_defects'] >= j['defects'] for j in jobs) and jobs[0]['initial_defects'] > 0, jobs
+assert jobs[1]['faces'] == r['faces'] and jobs[0]['faces'] > jobs[1]['faces'], (jobs, r['faces'])
+assert jobs[1]['initial_defects'] == r['fix_loop']['initial_defects'], (jobs, r['fix_loop'])
 assert r['unsplit_components'] == 1 and not r['split_discarded'] and r['split_edges'] > 0
 assert r['discarded_job_defects'] == jobs[0]['defects'] and not r['defects']
 assert r['output']['vertices'] == 60 and r['output']['components'] == 2 and r['output']['boundary_loops'] == 1
