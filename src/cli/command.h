@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,12 @@ void print_progress(const ClusterProgress& progress);
 /// fixed mmap threshold, so that freed per-face arrays go back to the system and the peak memory
 /// stays that of the largest phase. Call before reading the input. read_input() calls it.
 void prepare_allocator(const std::string& input_path);
+
+/// Whether this executable maps blocks of huge_page_block_bytes() or more itself, backed by huge
+/// pages (huge_pages.cpp): false in sanitizer builds, off Linux and under MESHCVT_HUGE_PAGES=0.
+bool maps_large_blocks();
+/// The smallest block huge_pages.cpp maps (2 MiB).
+std::size_t huge_page_block_bytes();
 
 /// read_mesh with ReadOptions::shift_far on, plus notes on stderr (unless quiet): a mesh that was
 /// moved near the origin (ReadStats::origin: outputs must add it back, WriteOptions::origin), PLY

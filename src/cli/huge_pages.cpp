@@ -25,6 +25,8 @@
 #include <mutex>
 #include <new>
 
+#include "command.h"
+
 #if defined(__linux__) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
 #include <sys/mman.h>
 #include <unistd.h>
@@ -104,6 +106,9 @@ bool unmap_block(void* block) {
 
 }  // namespace
 
+bool meshcvt::cli::maps_large_blocks() { return huge_pages_wanted(); }
+std::size_t meshcvt::cli::huge_page_block_bytes() { return kHugeBlockBytes; }
+
 void* operator new(std::size_t bytes) {
   if (bytes >= kHugeBlockBytes && huge_pages_wanted())
     if (void* block = map_block(bytes)) return block;
@@ -121,5 +126,10 @@ void operator delete(void* block) noexcept {
   if (block && !unmap_block(block)) std::free(block);
 }
 void operator delete(void* block, std::size_t) noexcept { operator delete(block); }
+
+#else
+
+bool meshcvt::cli::maps_large_blocks() { return false; }
+std::size_t meshcvt::cli::huge_page_block_bytes() { return std::size_t(2) << 20; }
 
 #endif
