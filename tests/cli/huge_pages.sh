@@ -37,29 +37,29 @@ if ! command -v strace >/dev/null || ! strace -f -o /dev/null true 2>/dev/null; 
   echo "note: strace cannot trace here; madvise not checked"
   exit 0
 fi
-advised() {  # the madvise(ADVICE) calls of a coarsening, then environment assignments
+trace() {  # tag, then environment assignments: a coarsening's madvise and mmap calls in trace-TAG.txt
   # (without GLIBC_TUNABLES: glibc.malloc.hugetlb=1 would make malloc advise too)
-  local advice=$1
+  local tag=$1
   shift
-  env -u GLIBC_TUNABLES "$@" strace -f -e trace=madvise -o "$tmp/trace.txt" "$cli" coarsen "$tmp/fine.ply" -n 3000 \
-    -o "$tmp/traced.ply" --no-error -q || fail "coarsen under strace failed"
-  grep -c "$advice" "$tmp/trace.txt" || true
+  env -u GLIBC_TUNABLES "$@" strace -f -e trace=madvise,mmap -o "$tmp/trace-$tag.txt" "$cli" coarsen "$tmp/fine.ply" \
+    -n 3000 -o "$tmp/traced.ply" --no-error -q || fail "coarsen under strace failed ($tag)"
 }
-on=$(advised MADV_HUGEPAGE)
-off=$(advised MADV_HUGEPAGE MESHCVT_HUGE_PAGES=0)
-# (MADV_DONTNEED: a thread's stack when it ends, and an arena's heap trimmed above its threshold.)
-returned_on=$(advised MADV_DONTNEED)
-returned_off=$(advised MADV_DONTNEED MESHCVT_HUGE_PAGES=0)
-[ "$returned_on" -le "$returned_off" ] ||
-  fail "memory given back $returned_on times with huge pages, $returned_off without: trimmed too often"
+trace on
+trace off MESHCVT_HUGE_PAGES=0
+count() { grep -c "$1" "$tmp/trace-$2.txt" || true; }
+on=$(count MADV_HUGEPAGE on)
+off=$(count MADV_HUGEPAGE off)
 [ "$on" -gt 0 ] || fail "no block was advised to use huge pages"
 [ "$off" -eq 0 ] || fail "MESHCVT_HUGE_PAGES=0 still advised $off block(s)"
+# MADV_DONTNEED: a thread's stack when it ends, and an arena's heap trimmed above its threshold.
+returned_on=$(count MADV_DONTNEED on)
+returned_off=$(count MADV_DONTNEED off)
+[ "$returned_on" -le "$returned_off" ] ||
+  fail "memory given back $returned_on times with huge pages, $returned_off without: trimmed too often"
 # Anonymous mappings of 128 KiB to 2 MiB: malloc's blocks of their own (thread stacks, arenas and
 # the blocks of huge_pages.cpp are larger; libraries are file mappings).
-env -u GLIBC_TUNABLES strace -f -e trace=mmap -o "$tmp/mmap.txt" "$cli" coarsen "$tmp/fine.ply" -n 3000 \
-  -o "$tmp/traced.ply" --no-error -q || fail "coarsen under strace failed"
 [ "$(stat -c %s "$tmp/fine.ply")" -lt $((8 << 20)) ] || fail "the test input is not below 8 MB"
-own=$(grep -o 'mmap(NULL, [0-9]*, PROT_READ|PROT_WRITE, MAP_PRIVATE|MAP_ANONYMOUS, -1' "$tmp/mmap.txt" |
+own=$(grep -o 'mmap(NULL, [0-9]*, PROT_READ|PROT_WRITE, MAP_PRIVATE|MAP_ANONYMOUS, -1' "$tmp/trace-on.txt" |
   awk -F'[(,]' '$3 + 0 >= 131072 && $3 + 0 < 2097152' | wc -l)
-[ "$own" -eq 0 ] || fail "malloc mapped $own block(s) of 128 KiB to 2 MiB on their own: $(grep -c mmap "$tmp/mmap.txt") mmaps"
+[ "$own" -eq 0 ] || fail "malloc mapped $own block(s) of 128 KiB to 2 MiB on their own: $(count 'mmap(' on) mmaps"
 echo "ok: $on blocks advised by default, none with MESHCVT_HUGE_PAGES=0"
