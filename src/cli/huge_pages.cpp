@@ -31,14 +31,19 @@
 
 #include "command.h"
 
+namespace {
+// Blocks smaller than a huge page (2 MiB) are left alone: they cannot fill one.
+constexpr std::size_t kHugeBlockBytes = std::size_t(2) << 20;
+}  // namespace
+
+std::size_t meshcvt::cli::huge_page_block_bytes() { return kHugeBlockBytes; }
+
 #if defined(__linux__) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
 #include <sys/mman.h>
 #include <unistd.h>
 
 namespace {
 
-// Blocks smaller than a huge page (2 MiB) are left alone: they cannot fill one.
-constexpr std::size_t kHugeBlockBytes = std::size_t(2) << 20;
 constexpr std::uintptr_t kHugePageBytes = std::uintptr_t(2) << 20;
 
 // The blocks mapped here, for operator delete to tell them from malloc's: few at a time (1024 of
@@ -111,7 +116,6 @@ bool unmap_block(void* block) {
 }  // namespace
 
 bool meshcvt::cli::maps_large_blocks() { return huge_pages_wanted(); }
-std::size_t meshcvt::cli::huge_page_block_bytes() { return kHugeBlockBytes; }
 
 void* operator new(std::size_t bytes) {
   if (bytes >= kHugeBlockBytes && huge_pages_wanted())
@@ -134,6 +138,5 @@ void operator delete(void* block, std::size_t) noexcept { operator delete(block)
 #else
 
 bool meshcvt::cli::maps_large_blocks() { return false; }
-std::size_t meshcvt::cli::huge_page_block_bytes() { return std::size_t(2) << 20; }
 
 #endif
