@@ -6,6 +6,8 @@
 # Results go to bench/RESULTS.md ("Table 1").
 # usage: bench/coarsen_share.sh RUNS MESHCVT [MESHCVT...]   (needs bench/fetch_meshes.sh, and
 #        bench/table1_bench.sh once for bench/data/sphere-131k.off)
+#        SHARE_CASES="MESH N [MESH N...]" bench/coarsen_share.sh ...   measures those meshes instead
+#        (a MESHCVT may be a script that adds options or environment).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 runs=$1
@@ -15,6 +17,7 @@ trap 'rm -rf "$work"' EXIT
 cases=(bench/data/meshes/bunny00.off 500 bench/data/meshes/fandisk.off 1000
        bench/data/meshes/refined_elephant.off 1000 bench/data/sphere-131k.off 200 bench/data/bunny-1.2M.ply 10000
        bench/data/bunny-4.8M.ply 10000)
+if [ -n "${SHARE_CASES:-}" ]; then read -r -a cases <<<"$SHARE_CASES"; fi
 for ((i = 0; i < ${#cases[@]}; i += 2)); do
   mesh=${cases[i]} n=${cases[i + 1]}
   [ -f "$mesh" ] || continue
