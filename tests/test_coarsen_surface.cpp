@@ -164,6 +164,42 @@ static void check_split_left(const Mesh& slivers, uint32_t n, const CoarsenSurfa
   CHECK_THROWS_WITH_AS(coarsen_surface(slivers, asked), doctest::Contains("would make more than"), OptionError);
 }
 
+TEST_CASE("coarsen_surface: an input with fewer than 5 faces per cluster is split though few of its edges are long") {
+  // A uniform sphere of 1280 faces: its edges are shorter than the coarse mesh's edge at any n
+  // below the face count, so the edge count alone never splits it; at 3.2 faces per cluster the
+  // clusters are one to four faces, and the coarse mesh's triangles are as ragged as they.
+  const Mesh sphere = test::icosphere(3);
+  const uint32_t n = 400;
+  REQUIRE(double(sphere.face_count()) < kAutoSplitFacesPerCluster * n);
+  CoarsenSurfaceOptions off = with_n(n);
+  off.split_edges = 0;
+  const CoarsenSurfaceResult plain = coarsen_surface(sphere, off);
+  const CoarsenSurfaceResult split = coarsen_surface(sphere, with_n(n));
+  CHECK(split.long_edges < n);
+  CHECK(split.split_ratio == kAutoSplitEdgesRatio);
+  CHECK(split.split_edges > 0);
+  CHECK(split.surface.face_count() > sphere.face_count());
+  CHECK(longest_edge(split.surface) <= split.coarse_edge_length / kAutoSplitEdgesRatio * (1 + 1e-6));
+  CHECK(plain.split_edges == 0);
+  check_valid(plain, n);
+  check_valid(split, n);
+  const TriangleQuality qp = triangle_quality(plain.job.coarse.mesh), qs = triangle_quality(split.job.coarse.mesh);
+  CHECK(qs.q_avg > qp.q_avg + 0.02);
+  CHECK(qs.min_angle_deg > qp.min_angle_deg);
+
+  // At 5 faces per cluster and more, auto leaves it as given (as long as few edges are long).
+  const CoarsenSurfaceResult five = coarsen_surface(sphere, with_n(sphere.face_count() / 5));
+  CHECK(five.long_edges < sphere.face_count() / 5);
+  CHECK(five.split_edges == 0);
+  CHECK(five.surface.face_count() == sphere.face_count());
+
+  // More vertices than faces: split first, where coarsen_mesh alone refuses.
+  const uint32_t more = uint32_t(sphere.face_count()) + 100;
+  const CoarsenSurfaceResult many = coarsen_surface(sphere, with_n(more));
+  CHECK(many.split_edges > 0);
+  check_valid(many, more);
+}
+
 TEST_CASE("coarsen_surface: the split of slivers stops at its budget where the lower bound is far below") {
   // A double needle: apexes at x = 0 and 2, a triangle 1e-4 wide at x = 1 between them (six long
   // edges: enough for auto to split at n = 4). The bound (split_long_edges_min_faces) is within

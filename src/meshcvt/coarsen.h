@@ -533,21 +533,32 @@ const char* to_string(DualDefect::Kind k);
 inline constexpr int kSubdivideByPlacement = -2;
 inline constexpr int kSubdivideAuto = -1;
 /// CoarsenSurfaceOptions::split_edges: split at 1 / kAutoSplitEdgesRatio of the coarse edge length
-/// where at least one edge per cluster is longer than that length, else not at all; and, where
+/// where at least one edge per cluster is longer than that length or the input has fewer than
+/// kAutoSplitFacesPerCluster faces per cluster, else not at all; and, where
 /// the split keeps defects, leave the components that have them as given, or all of it, when that
 /// leaves fewer defects (see coarsen_surface). The ratio was chosen by sweeps over
 /// libcgal-demo's meshes (bench/RESULTS.md, "Coarsening: long faces": 0.5 and 0.7 gave part of
 /// the gain, 2 and 3 refine more for less).
 inline constexpr double kSplitEdgesAuto = -1;
 inline constexpr double kAutoSplitEdgesRatio = 1.5;
+/// kSplitEdgesAuto splits an input with fewer faces than this per cluster whatever its edges:
+/// clusters of one to four faces cannot be round, and the edge count alone misses inputs whose
+/// edges are just below the coarse edge length (libcgal-demo's pinion -> faces / 1.5: 0.66 long
+/// edges per cluster, Q avg 0.495 and 1252 angles below 30 degrees as given, 0.870 and none
+/// split). Measured on the 128 libcgal-demo meshes up to 20k faces that auto did not split
+/// (bench/RESULTS.md, "Coarsening: long faces", forty-first session): at faces / 1.5 Q avg 0.648
+/// -> 0.884 on average, at faces / 2.5 0.789 -> 0.888, at faces / 4 0.847 -> 0.871 (angles
+/// below 30 degrees 641 -> 115), at faces / 6 only 0.858 -> 0.871, with two meshes worse.
+inline constexpr double kAutoSplitFacesPerCluster = 5;
 /// kSplitEdgesAuto leaves the long edges as they are where splitting them would make more than this
 /// many faces per cluster or per input face (split_long_edges_min_faces, and the split itself stops
 /// at that budget: see split_long_edges' max_faces), and an explicit ratio is refused there
 /// (OptionError): where the faces are slivers with long edges and almost no area,
 /// the coarse edge length follows from that area and the split would go on for millions of faces
 /// (7 faces of libcgal-demo's degtri_sliding, welded: more than 24 GB). The largest growth
-/// measured on libcgal-demo's meshes is 14, far below it (bench/RESULTS.md, "Coarsening: long
-/// faces").
+/// measured on clean libcgal-demo meshes is 42 (pipe -> 213; pinion -> faces / 1.5, split for
+/// having fewer than kAutoSplitFacesPerCluster faces per cluster: 31.5), far below it
+/// (bench/RESULTS.md, "Coarsening: long faces").
 inline constexpr double kAutoSplitMaxGrowth = 1000;
 
 /// The whole of `meshcvt coarsen` between reading and writing: what it does to the input before
