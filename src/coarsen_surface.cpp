@@ -398,7 +398,10 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
       result.long_edges = edges_longer_than(pool, mesh, result.coarse_edge_length, density);
     }
   }
-  const bool too_coarse = double(mesh.face_count()) < kAutoSplitFacesPerCluster * double(n);
+  // (Not where n is above the face count: an n far beyond what the input holds would be split for
+  // until memory runs out; the error below names the remedy instead.)
+  const bool too_coarse =
+      n <= mesh.face_count() && double(mesh.face_count()) < kAutoSplitFacesPerCluster * double(n);
   const double ratio =
       auto_split ? ((result.long_edges >= n || too_coarse) && n > 0 ? kAutoSplitEdgesRatio : 0) : split_option;
   // auto: the mesh before the split, its density, the split's limits and the parents of the split
