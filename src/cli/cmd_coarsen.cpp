@@ -417,7 +417,7 @@ const RegisterCommand reg(30, [](CLI::App& app) {
                   "length (sqrt(2 area / (sqrt 3 n)); with --gradation, where the density is), so that no face is "
                   "longer than a cluster is wide: CAD exports' long thin triangles (libcgal-demo's pinion_small -> 130: Q avg "
                   "0.51 -> 0.84). auto (the default): R = 1.5 when at least one edge per cluster is that long or the input "
-                  "has fewer than 5 faces per cluster, and "
+                  "has fewer than 5 faces per cluster (but at least one), and "
                   "the components that keep defects split (or all of it) as given instead where that leaves fewer; off = 0");
   sub->add_option("--fix-rounds", a->fix_rounds,
                   "rounds of fixing the clustering where its dual is not a manifold (default 12; 0 = report only)");

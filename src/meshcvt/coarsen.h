@@ -534,7 +534,7 @@ inline constexpr int kSubdivideByPlacement = -2;
 inline constexpr int kSubdivideAuto = -1;
 /// CoarsenSurfaceOptions::split_edges: split at 1 / kAutoSplitEdgesRatio of the coarse edge length
 /// where at least one edge per cluster is longer than that length or the input has fewer than
-/// kAutoSplitFacesPerCluster faces per cluster, else not at all; and, where
+/// kAutoSplitFacesPerCluster faces per cluster (and at least one), else not at all; and, where
 /// the split keeps defects, leave the components that have them as given, or all of it, when that
 /// leaves fewer defects (see coarsen_surface). The ratio was chosen by sweeps over
 /// libcgal-demo's meshes (bench/RESULTS.md, "Coarsening: long faces": 0.5 and 0.7 gave part of
