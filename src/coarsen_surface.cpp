@@ -398,8 +398,8 @@ CoarsenSurfaceResult coarsen_surface(Mesh mesh, const CoarsenSurfaceOptions& opt
       result.long_edges = edges_longer_than(pool, mesh, result.coarse_edge_length, density);
     }
   }
-  // (Not where n is above the face count: an n far beyond what the input holds would be split for
-  // until memory runs out; the error below names the remedy instead.)
+  // (Not where n is above the face count: for an n far beyond what the input holds the split would
+  // go on until memory ran out; the error below names the remedy instead.)
   const bool too_coarse =
       n <= mesh.face_count() && double(mesh.face_count()) < kAutoSplitFacesPerCluster * double(n);
   const double ratio =
